@@ -1,0 +1,76 @@
+// The mission state machine: idle -> wall_follow -> model -> ... -> done, with
+// fault on controller loss and stop/start at any time. Owns the behaviours
+// (wall following now; go-to and contour following come with exploration) and
+// turns their twist into wheel velocities. Pure: time is an argument.
+#ifndef IRSLAM_CONTROL_MISSION_H_
+#define IRSLAM_CONTROL_MISSION_H_
+
+#include <string>
+
+#include "control/wall_follower.h"
+#include "slam/slam.h"
+#include "slam/types.h"
+
+namespace irslam::control {
+
+enum class MissionState : uint8_t {
+  kIdle = 0,
+  kWallFollow = 1,
+  kModel = 2,
+  kGoToP1 = 3,
+  kContourFollow = 4,
+  kDone = 5,
+  kFault = 6,
+};
+const char* ToString(MissionState s);
+
+struct MissionOptions {
+  double max_time_s = 900;           // whole mission, robot time
+  double progress_timeout_s = 120;   // no new distance covered for this long: give up
+  double loop_min_distance_m = 3.0;  // wall following must cover this before a loop can close
+  double loop_close_radius_m = 0.5;  // back within this of where wall following started
+  double loop_close_angle_rad = 0.7;
+  double max_accel_mps2 = 0.8;       // wheel acceleration limit of the command
+};
+
+class Mission {
+ public:
+  Mission(MissionOptions options, WallFollowerOptions wall, const slam::SlamOptions& slam);
+
+  bool Start(double t, std::string* why);
+  void Stop(double t);
+  // Controller lost / back: fault keeps the state to resume.
+  void SetFault(double t, const std::string& reason);
+  void ClearFault(double t);
+
+  // One control period: returns the wheel command.
+  WheelCommand Step(double t, const slam::Slam& slam, const RangeScan& scan, bool bumped);
+
+  MissionState state() const { return state_; }
+  const std::string& reason() const { return reason_; }
+  const WallFollower& wall_follower() const { return follower_; }
+  double started_at() const { return started_at_; }
+
+ private:
+  void Enter(MissionState s, double t, std::string reason);
+  WheelCommand ToWheels(const Twist& tw, double dt);
+
+  MissionOptions options_;
+  slam::RobotGeometry geometry_;
+  WallFollower follower_;
+  MissionState state_ = MissionState::kIdle;
+  MissionState resume_state_ = MissionState::kIdle;
+  std::string reason_;
+  double started_at_ = 0;
+  double last_t_ = 0;
+  bool have_anchor_ = false;
+  Pose2 anchor_;
+  double anchor_distance_ = 0;
+  double progress_distance_ = 0;
+  double progress_t_ = 0;
+  WheelCommand last_cmd_;
+};
+
+}  // namespace irslam::control
+
+#endif  // IRSLAM_CONTROL_MISSION_H_

@@ -1,0 +1,164 @@
+#include "control/robot_core.h"
+
+#include <cmath>
+
+namespace irslam::control {
+
+CoreOptions DefaultCoreOptions() {
+  CoreOptions o;
+  // Seven IR sensors on a ring of 5 cm radius, from the right (-90 deg) to the left (+90 deg).
+  const double deg[kNumIrSensors] = {-90, -45, -20, 0, 20, 45, 90};
+  for (int i = 0; i < kNumIrSensors; ++i) {
+    const double a = deg[i] * M_PI / 180.0;
+    o.slam.mounts[i] = {0.05 * std::cos(a), 0.05 * std::sin(a), a};
+  }
+  return o;
+}
+
+RobotCore::RobotCore(CoreOptions options)
+    : options_(std::move(options)),
+      motor_(options_.motor),
+      calibration_(options_.ir),
+      slam_(options_.slam),
+      mission_(options_.mission, options_.wall, options_.slam) {}
+
+void RobotCore::OnFrame(const can_frame& frame, double now_s) {
+  const drivers::MotorClient::Event ev = motor_.Handle(frame, now_s);
+  if (ev.ticks) {
+    // Frames older than what SLAM has seen (reordered) are not fed back in time.
+    if (ev.ticks->t >= slam_.time()) slam_.AddWheelTicks(*ev.ticks);
+  }
+  if (ev.ir_adc) {
+    last_adc_ = *ev.ir_adc;
+    scan_.t = ev.ir_t;
+    for (int i = 0; i < kNumIrSensors; ++i) {
+      scan_.range_m[i] = calibration_.CountsToRange((*ev.ir_adc)[i]);
+    }
+    slam_.AddRangeScan(scan_);
+  }
+  if (ev.status) {
+    bumped_ = ev.status->bumpers != 0;
+  }
+}
+
+std::vector<can_frame> RobotCore::Tick(double now_s) {
+  std::vector<can_frame> out;
+  const bool alive = motor_.ControllerAlive(now_s);
+  if (alive) ever_alive_ = true;
+  const bool active = mission_.state() != MissionState::kIdle &&
+                      mission_.state() != MissionState::kDone;
+  if (!alive && active && mission_.state() != MissionState::kFault) {
+    mission_.SetFault(now_s, std::string("controller lost: ") + motor_.LossReason(now_s));
+  } else if (alive && mission_.state() == MissionState::kFault) {
+    mission_.ClearFault(now_s);
+  }
+  last_cmd_ = mission_.Step(now_s, slam_, scan_, bumped_);
+  out.push_back(motor_.MakeCommand(last_cmd_));
+  if (now_s - last_heartbeat_ >= options_.heartbeat_period_s - 1e-9) {
+    last_heartbeat_ = now_s;
+    out.push_back(motor_.MakeHeartbeat(static_cast<uint8_t>(mission_.state())));
+  }
+  return out;
+}
+
+bool RobotCore::Start(double now_s, std::string* why) {
+  if (!motor_.ControllerAlive(now_s)) {
+    *why = std::string("controller not reachable: ") + motor_.LossReason(now_s);
+    return false;
+  }
+  return mission_.Start(now_s, why);
+}
+
+void RobotCore::Stop(double now_s) {
+  mission_.Stop(now_s);
+  last_cmd_ = {};
+}
+
+can_frame RobotCore::StopFrame() { return motor_.MakeCommand(WheelCommand{}); }
+
+namespace {
+
+nlohmann::json PoseJson(const Pose2& p) { return {p.x, p.y, p.theta}; }
+
+nlohmann::json MatrixJson(const Eigen::MatrixXd& m) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int i = 0; i < m.rows(); ++i) {
+    nlohmann::json row = nlohmann::json::array();
+    for (int j = 0; j < m.cols(); ++j) row.push_back(m(i, j));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+}  // namespace
+
+nlohmann::json RobotCore::Status(double now_s) const {
+  const auto& c = motor_.counters();
+  nlohmann::json ranges = nlohmann::json::array();
+  for (const auto& r : scan_.range_m) ranges.push_back(r ? nlohmann::json(*r) : nlohmann::json());
+  nlohmann::json s = {
+      {"state", ToString(mission_.state())},
+      {"reason", mission_.reason()},
+      {"behaviour", ToString(mission_.wall_follower().mode())},
+      {"robot_time", now_s},
+      {"pose", PoseJson(slam_.pose())},
+      {"pose_std", {std::sqrt(slam_.pose_cov()(0, 0)), std::sqrt(slam_.pose_cov()(1, 1)),
+                    std::sqrt(slam_.pose_cov()(2, 2))}},
+      {"distance", slam_.distance_m()},
+      {"lines", slam_.lines().size()},
+      {"objects", 0},
+      {"ir_ranges", ranges},
+      {"ir_adc", last_adc_},
+      {"command", {last_cmd_.left_mps, last_cmd_.right_mps}},
+      {"controller",
+       {{"alive", motor_.ControllerAlive(now_s)},
+        {"state", motor_.last_status() ? static_cast<int>(motor_.last_status()->state) : -1},
+        {"faults", motor_.last_status() ? motor_.last_status()->faults : 0},
+        {"bumpers", motor_.last_status() ? motor_.last_status()->bumpers : 0},
+        {"battery", motor_.last_status() ? motor_.last_status()->battery_v : 0.0}}},
+      {"frames",
+       {{"encoder", c.encoder_frames},
+        {"ir", c.ir_samples},
+        {"status", c.status_frames},
+        {"unknown_id", c.unknown_id},
+        {"wrong_dlc", c.wrong_dlc},
+        {"ignored", c.ignored},
+        {"seq_gap_encoder", c.seq_gap_encoder},
+        {"seq_gap_ir", c.seq_gap_ir},
+        {"seq_gap_status", c.seq_gap_status},
+        {"ir_unpaired", c.ir_unpaired},
+        {"controller_resets", c.controller_resets}}},
+  };
+  return s;
+}
+
+nlohmann::json RobotCore::Map() const {
+  nlohmann::json lines = nlohmann::json::array();
+  for (const auto& l : slam_.lines()) {
+    lines.push_back({{"id", l.id},
+                     {"rho", l.rho},
+                     {"theta", l.theta},
+                     {"cov", MatrixJson(l.cov)},
+                     {"p0", {l.p0.x(), l.p0.y()}},
+                     {"p1", {l.p1.x(), l.p1.y()}},
+                     {"length", l.length()}});
+  }
+  nlohmann::json traj = nlohmann::json::array();
+  for (const auto& p : slam_.trajectory()) traj.push_back({p.t, p.pose.x, p.pose.y, p.pose.theta});
+  return {
+      {"frame", "map"},
+      {"state", ToString(mission_.state())},
+      {"pose", PoseJson(slam_.pose())},
+      {"pose_cov", MatrixJson(slam_.pose_cov())},
+      {"lines", lines},
+      {"room", {{"walls", {{"bottom", nlohmann::json::array()},
+                           {"right", nlohmann::json::array()},
+                           {"top", nlohmann::json::array()},
+                           {"left", nlohmann::json::array()}}},
+                {"box", nullptr}}},
+      {"objects", nlohmann::json::array()},
+      {"trajectory", traj},
+  };
+}
+
+}  // namespace irslam::control

@@ -1,0 +1,73 @@
+// RobotCore: everything irslamd does between the CAN socket and the API, as pure
+// code. Frames in (with the host's robot time), frames out once per control
+// period, status and map as JSON values. The daemon drives it from its event
+// loop; `irslam-sim run` drives the very same object in process.
+#ifndef IRSLAM_CONTROL_ROBOT_CORE_H_
+#define IRSLAM_CONTROL_ROBOT_CORE_H_
+
+#include <linux/can.h>
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "control/mission.h"
+#include "drivers/ir_calibration.h"
+#include "drivers/motor_client.h"
+#include "slam/slam.h"
+
+namespace irslam::control {
+
+// Every parameter of the robot software (config file sections in brackets).
+struct CoreOptions {
+  slam::SlamOptions slam;                 // [robot], [sensors].mounts, [slam]
+  drivers::IrCalibrationOptions ir;       // [sensors]
+  drivers::MotorClientOptions motor;      // [controller]
+  WallFollowerOptions wall;               // [wall_follow]
+  MissionOptions mission;                 // [mission]
+  double period_s = 0.02;                 // [control].period_s
+  double heartbeat_period_s = 0.1;        // [controller].heartbeat_period_s
+};
+
+CoreOptions DefaultCoreOptions();
+
+class RobotCore {
+ public:
+  explicit RobotCore(CoreOptions options);
+
+  // A frame received from the bus at host robot time now_s.
+  void OnFrame(const can_frame& frame, double now_s);
+  // One control period at host robot time now_s: returns the frames to send.
+  std::vector<can_frame> Tick(double now_s);
+
+  bool Start(double now_s, std::string* why);
+  void Stop(double now_s);
+  // Frames that stop the wheels at once (used on stop and shutdown).
+  can_frame StopFrame();
+
+  nlohmann::json Status(double now_s) const;
+  nlohmann::json Map() const;
+
+  MissionState state() const { return mission_.state(); }
+  const slam::Slam& slam() const { return slam_; }
+  const drivers::MotorClient& motor() const { return motor_; }
+  const WheelCommand& last_command() const { return last_cmd_; }
+  const CoreOptions& options() const { return options_; }
+
+ private:
+  CoreOptions options_;
+  drivers::MotorClient motor_;
+  drivers::IrCalibration calibration_;
+  slam::Slam slam_;
+  Mission mission_;
+  RangeScan scan_;
+  std::array<uint16_t, kNumIrSensors> last_adc_{};
+  bool bumped_ = false;
+  bool ever_alive_ = false;
+  double last_heartbeat_ = -1e9;
+  WheelCommand last_cmd_;
+};
+
+}  // namespace irslam::control
+
+#endif  // IRSLAM_CONTROL_ROBOT_CORE_H_

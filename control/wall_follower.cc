@@ -1,0 +1,190 @@
+#include "control/wall_follower.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace irslam::control {
+namespace {
+
+// Sensor indices by mounting direction (config order: right ... left).
+constexpr int kRight = 0;       // -90 deg
+constexpr int kRightFront = 1;  // -45 deg
+constexpr int kFrontRight = 2;  // -20 deg
+constexpr int kFront = 3;       //   0 deg
+constexpr int kFrontLeft = 4;   // +20 deg
+
+struct Point {
+  double x, y;
+};
+
+Point Hit(const slam::SensorMount& m, double r) {
+  return {m.x + r * std::cos(m.theta), m.y + r * std::sin(m.theta)};
+}
+
+}  // namespace
+
+const char* ToString(FollowMode m) {
+  switch (m) {
+    case FollowMode::kFind: return "find_wall";
+    case FollowMode::kAlign: return "align";
+    case FollowMode::kFollow: return "follow";
+    case FollowMode::kInnerCorner: return "inner_corner";
+    case FollowMode::kOuterCorner: return "outer_corner";
+    case FollowMode::kBackoff: return "backoff";
+  }
+  return "?";
+}
+
+WallFollower::WallFollower(WallFollowerOptions options,
+                           const std::array<slam::SensorMount, kNumIrSensors>& mounts,
+                           double robot_radius_m)
+    : options_(options), mounts_(mounts), robot_radius_m_(robot_radius_m) {}
+
+void WallFollower::Reset() {
+  mode_ = FollowMode::kFind;
+  has_followed_ = false;
+  turned_rad_ = 0;
+}
+
+void WallFollower::Enter(FollowMode m, double t) {
+  if (m == mode_) return;
+  mode_ = m;
+  mode_since_ = t;
+  turned_rad_ = 0;
+  if (m == FollowMode::kFollow) has_followed_ = true;
+}
+
+std::optional<WallEstimate> WallFollower::RightWall(const RangeScan& scan) const {
+  const auto& r0 = scan.range_m[kRight];
+  const auto& r1 = scan.range_m[kRightFront];
+  const double lost = options_.follow_distance_m + options_.lost_wall_margin_m;
+  if (r0 && r1) {
+    const Point a = Hit(mounts_[kRight], *r0);
+    const Point b = Hit(mounts_[kRightFront], *r1);
+    const double dx = b.x - a.x, dy = b.y - a.y;
+    const double len = std::hypot(dx, dy);
+    if (len > 1e-3) {
+      // Distance from the centre (origin) to the line through a and b.
+      const double d = std::abs(a.x * dy - a.y * dx) / len;
+      const double ang = std::atan2(dy, dx);
+      if (d < lost && std::abs(ang) < 1.3) return WallEstimate{d, ang};
+    }
+  }
+  if (r0) {
+    const Point a = Hit(mounts_[kRight], *r0);
+    if (-a.y < lost) return WallEstimate{-a.y, 0.0};
+  }
+  if (r1) {
+    // Only the diagonal sensor: assume the wall is parallel.
+    const Point b = Hit(mounts_[kRightFront], *r1);
+    if (-b.y < lost) return WallEstimate{-b.y, 0.0};
+  }
+  return std::nullopt;
+}
+
+std::optional<double> WallFollower::FrontDistance(const RangeScan& scan) const {
+  std::optional<double> best;
+  for (int i : {kFrontRight, kFront, kFrontLeft}) {
+    if (!scan.range_m[i]) continue;
+    const Point p = Hit(mounts_[i], *scan.range_m[i]);
+    // Only obstacles in the robot's swept corridor count as "ahead".
+    if (std::abs(p.y) > robot_radius_m_ + 0.05 || p.x <= 0) continue;
+    if (!best || p.x < *best) best = p.x;
+  }
+  return best;
+}
+
+Twist WallFollower::Step(double t, const RangeScan& scan, bool bumped) {
+  const double dt = std::clamp(t - last_t_, 0.0, 0.1);
+  last_t_ = t;
+  const auto front = FrontDistance(scan);
+  const auto wall = RightWall(scan);
+  const auto& o = options_;
+  Twist out;
+
+  if (bumped && mode_ != FollowMode::kBackoff) Enter(FollowMode::kBackoff, t);
+
+  switch (mode_) {
+    case FollowMode::kBackoff: {
+      const double age = t - mode_since_;
+      if (age < o.backoff_time_s) {
+        out = {-o.backoff_speed_mps, 0};
+      } else if (turned_rad_ < o.backoff_turn_rad) {
+        out = {0, o.turn_rate_rad_s};
+      } else if (!bumped) {
+        Enter(has_followed_ ? FollowMode::kFollow : FollowMode::kFind, t);
+      }
+      break;
+    }
+    case FollowMode::kFind:
+      if ((front && *front < o.follow_distance_m + 0.15) || (wall && wall->distance_m < o.follow_distance_m + 0.1)) {
+        Enter(FollowMode::kAlign, t);
+        break;
+      }
+      out = {o.cruise_speed_mps, 0};
+      if (front && *front < o.front_slow_m) out.v *= 0.5;
+      break;
+    case FollowMode::kAlign:
+      // Turn left in place until the wall is on the right and nothing is ahead.
+      if (wall && !front && std::abs(wall->angle_rad) < 0.25) {
+        Enter(FollowMode::kFollow, t);
+        break;
+      }
+      if (turned_rad_ > 2 * M_PI + 0.5) {  // a full turn and no wall: go and look elsewhere
+        Enter(FollowMode::kFind, t);
+        break;
+      }
+      out = {0, o.turn_rate_rad_s};
+      break;
+    case FollowMode::kInnerCorner:
+      if (!front || *front > o.front_stop_m + 0.15) {
+        Enter(FollowMode::kFollow, t);
+        break;
+      }
+      out = {0, o.turn_rate_rad_s};
+      break;
+    case FollowMode::kOuterCorner:
+      if (front && *front < o.front_stop_m) {
+        Enter(FollowMode::kInnerCorner, t);
+        out = {0, o.turn_rate_rad_s};
+        break;
+      }
+      if (wall && wall->distance_m < o.follow_distance_m + 0.15 && turned_rad_ < -0.3) {
+        Enter(FollowMode::kFollow, t);
+        break;
+      }
+      if (turned_rad_ < -2 * M_PI) {  // circled without finding a wall: search again
+        Enter(FollowMode::kFind, t);
+        break;
+      }
+      out = {o.outer_arc_speed_mps, -o.outer_arc_speed_mps / o.follow_distance_m};
+      break;
+    case FollowMode::kFollow:
+      break;
+  }
+
+  if (mode_ == FollowMode::kFollow) {
+    if (front && *front < o.front_stop_m) {
+      Enter(FollowMode::kInnerCorner, t);
+      out = {0, o.turn_rate_rad_s};
+    } else if (!wall) {
+      Enter(FollowMode::kOuterCorner, t);
+      out = {o.outer_arc_speed_mps, 0};
+    } else {
+      last_wall_angle_ = wall->angle_rad;
+      double omega = o.k_angle * wall->angle_rad -
+                     o.k_distance * (wall->distance_m - o.follow_distance_m);
+      omega = std::clamp(omega, -o.max_turn_rate_rad_s, o.max_turn_rate_rad_s);
+      double v = o.cruise_speed_mps * (1.0 - 0.6 * std::abs(omega) / o.max_turn_rate_rad_s);
+      if (front && *front < o.front_slow_m) {
+        const double f = (*front - o.front_stop_m) / (o.front_slow_m - o.front_stop_m);
+        v *= std::clamp(0.3 + 0.7 * f, 0.3, 1.0);
+      }
+      out = {v, omega};
+    }
+  }
+  turned_rad_ += out.omega * dt;
+  return out;
+}
+
+}  // namespace irslam::control

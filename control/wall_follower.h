@@ -1,0 +1,79 @@
+// Reactive wall following with the right-hand rule (paper §5, exploration step 1):
+// find a wall, turn so it is on the right, then keep it at follow_distance_m while
+// driving at cruise speed; turn left in place at inner corners, arc right around
+// outer corners. Works on the latest IR ranges only; pure (time is an argument).
+#ifndef IRSLAM_CONTROL_WALL_FOLLOWER_H_
+#define IRSLAM_CONTROL_WALL_FOLLOWER_H_
+
+#include <array>
+#include <optional>
+
+#include "slam/slam.h"
+#include "slam/types.h"
+
+namespace irslam::control {
+
+struct WallFollowerOptions {
+  double follow_distance_m = 0.40;  // robot centre to the wall on the right
+  double cruise_speed_mps = 0.20;
+  double front_stop_m = 0.45;       // obstacle this close ahead (from the centre): inner corner
+  double front_slow_m = 0.80;       // start slowing down below this
+  double k_distance = 2.5;          // rad/s per metre of distance error
+  double k_angle = 2.0;             // rad/s per radian of wall angle
+  double max_turn_rate_rad_s = 1.2;
+  double turn_rate_rad_s = 0.8;     // in-place turns at inner corners
+  double lost_wall_margin_m = 0.30; // wall farther than follow + this is "lost"
+  double outer_arc_speed_mps = 0.12;
+  double backoff_speed_mps = 0.08;
+  double backoff_time_s = 0.6;
+  double backoff_turn_rad = 0.5;
+};
+
+// Which case of the follower is active (shown in status).
+enum class FollowMode { kFind, kAlign, kFollow, kInnerCorner, kOuterCorner, kBackoff };
+const char* ToString(FollowMode m);
+
+struct Twist {
+  double v = 0;      // m/s
+  double omega = 0;  // rad/s, positive = left
+};
+
+// The right wall as seen from the robot centre.
+struct WallEstimate {
+  double distance_m = 0;
+  double angle_rad = 0;  // wall direction relative to the heading (+: wall turns left/closer)
+};
+
+class WallFollower {
+ public:
+  WallFollower(WallFollowerOptions options, const std::array<slam::SensorMount, kNumIrSensors>& mounts,
+               double robot_radius_m);
+
+  // One control step at robot time t with the latest scan; bumped: a bumper is pressed.
+  Twist Step(double t, const RangeScan& scan, bool bumped);
+  void Reset();
+  FollowMode mode() const { return mode_; }
+  // True once a wall has been found and followed.
+  bool following() const { return has_followed_; }
+
+  // Exposed for tests.
+  std::optional<WallEstimate> RightWall(const RangeScan& scan) const;
+  std::optional<double> FrontDistance(const RangeScan& scan) const;
+
+ private:
+  void Enter(FollowMode m, double t);
+
+  WallFollowerOptions options_;
+  std::array<slam::SensorMount, kNumIrSensors> mounts_;
+  double robot_radius_m_;
+  FollowMode mode_ = FollowMode::kFind;
+  double mode_since_ = 0;
+  double last_t_ = 0;
+  double turned_rad_ = 0;  // rotation accumulated in the current mode
+  bool has_followed_ = false;
+  double last_wall_angle_ = 0;
+};
+
+}  // namespace irslam::control
+
+#endif  // IRSLAM_CONTROL_WALL_FOLLOWER_H_

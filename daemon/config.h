@@ -1,0 +1,24 @@
+// The one configuration file of irslamd (and of `irslam-sim run`): JSON with
+// // comments, every key optional with a documented default (docs/config.md,
+// config/irslamd.conf), unknown keys rejected with their full name.
+#ifndef IRSLAM_DAEMON_CONFIG_H_
+#define IRSLAM_DAEMON_CONFIG_H_
+
+#include <string>
+#include <string_view>
+
+#include "control/robot_core.h"
+
+namespace irslam {
+
+// Parses config text over the defaults. On error returns false and sets *error to
+// one line naming the key or the position of the problem.
+bool ParseConfig(std::string_view text, control::CoreOptions* options, std::string* error);
+// Reads and parses a file ("config: cannot read FILE: ..." on I/O errors).
+bool LoadConfigFile(const std::string& path, control::CoreOptions* options, std::string* error);
+// The effective configuration as JSON (what `irslamd --print-config` shows).
+std::string DumpConfig(const control::CoreOptions& options);
+
+}  // namespace irslam
+
+#endif  // IRSLAM_DAEMON_CONFIG_H_

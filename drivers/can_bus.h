@@ -1,0 +1,66 @@
+// CanBus: where CAN frames come from and go to. Backends:
+//   - SocketCAN ("can0", "vcan0"): a raw socket on the io_context;
+//   - loopback ("unix:PATH"): the same 16-byte struct can_frame over Unix datagram
+//     sockets in the directory PATH, with vcan's semantics (every frame a node sends
+//     reaches every other node; nodes may join and leave at any time), for hosts
+//     whose kernel has no CAN support.
+// Receiving is asynchronous on the caller's io_context; sending never blocks.
+#ifndef IRSLAM_DRIVERS_CAN_BUS_H_
+#define IRSLAM_DRIVERS_CAN_BUS_H_
+
+#include <linux/can.h>
+
+#include <boost/asio/io_context.hpp>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace irslam::drivers {
+
+struct CanStats {
+  uint64_t rx_frames = 0;
+  uint64_t tx_frames = 0;
+  uint64_t rx_dropped = 0;      // frames the kernel dropped (SO_RXQ_OVFL) / loopback overflow
+  uint64_t tx_dropped = 0;      // frames not sent (queue full, interface down)
+  uint64_t filtered = 0;        // frames received but not in the id filter (loopback only)
+  uint64_t error_frames = 0;    // CAN error frames (SocketCAN only)
+  uint64_t bus_off = 0;         // bus-off events (SocketCAN only)
+  uint64_t link_down_events = 0;
+  bool link_up = true;
+  std::string last_error;       // last error-frame or I/O problem, for status
+};
+
+class CanBus {
+ public:
+  // rx_time_s: kernel receive time (CLOCK_REALTIME seconds) when known, else 0.
+  using FrameHandler = std::function<void(const can_frame& frame, double rx_time_s)>;
+
+  virtual ~CanBus() = default;
+  CanBus() = default;
+  CanBus(const CanBus&) = delete;
+  CanBus& operator=(const CanBus&) = delete;
+
+  // Starts delivering received frames to `handler` on the io_context.
+  virtual void Start(FrameHandler handler) = 0;
+  // Queues a frame for transmission; false (and counted) if it could not be sent.
+  virtual bool Send(const can_frame& frame) = 0;
+  virtual void Close() = 0;
+  virtual const CanStats& stats() const = 0;
+  virtual std::string name() const = 0;
+};
+
+struct CanBusOptions {
+  std::string iface;             // "vcan0" or "unix:/run/irslam/bus"
+  std::vector<uint32_t> rx_ids;  // standard ids to receive; empty = all
+};
+
+// Opens the bus named by options.iface. On failure returns nullptr and sets *error
+// to a one-line explanation (e.g. "kernel has no CAN support ...").
+std::unique_ptr<CanBus> OpenCanBus(boost::asio::io_context& io, const CanBusOptions& options,
+                                   std::string* error);
+
+}  // namespace irslam::drivers
+
+#endif  // IRSLAM_DRIVERS_CAN_BUS_H_

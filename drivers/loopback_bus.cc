@@ -1,0 +1,197 @@
+// Loopback CAN bus over Unix datagram sockets (see can_bus.h).
+//
+// PATH is a directory; each node binds one SOCK_DGRAM socket "node-<pid>-<n>" in it.
+// Sending a frame sends the 16-byte struct can_frame to every other socket in the
+// directory. The peer list is re-read whenever the directory changed (its mtime,
+// compared conservatively because the kernel stamps it with a coarse clock), so a
+// node that joined is reached by the very next frame. A peer that died leaves a
+// socket file nobody listens on: sendto() says ECONNREFUSED and we unlink it.
+#include "drivers/internal/loopback_bus.h"
+
+#include <dirent.h>
+#include <fcntl.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <ctime>
+
+namespace irslam::drivers {
+namespace {
+
+bool MakeAddr(const std::string& path, sockaddr_un* addr, socklen_t* len) {
+  std::memset(addr, 0, sizeof(*addr));
+  addr->sun_family = AF_UNIX;
+  if (path.size() >= sizeof(addr->sun_path)) return false;
+  std::memcpy(addr->sun_path, path.data(), path.size());
+  *len = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + path.size() + 1);
+  return true;
+}
+
+}  // namespace
+
+LoopbackBus::LoopbackBus(boost::asio::io_context& io, std::string dir, std::vector<uint32_t> ids)
+    : dir_(std::move(dir)), ids_(std::move(ids)), descriptor_(io) {}
+
+LoopbackBus::~LoopbackBus() { Close(); }
+
+bool LoopbackBus::Open(std::string* error) {
+  if (::mkdir(dir_.c_str(), 0770) != 0 && errno != EEXIST) {
+    *error = "can: cannot create loopback bus directory " + dir_ + ": " + std::strerror(errno);
+    return false;
+  }
+  struct stat st{};
+  if (::stat(dir_.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    *error = "can: loopback bus path " + dir_ + " is not a directory";
+    return false;
+  }
+  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+  if (fd < 0) {
+    *error = std::string("can: socket(AF_UNIX): ") + std::strerror(errno);
+    return false;
+  }
+  own_name_ = "node-" + std::to_string(::getpid()) + "-" + std::to_string(fd);
+  own_path_ = dir_ + "/" + own_name_;
+  sockaddr_un addr;
+  socklen_t len;
+  if (!MakeAddr(own_path_, &addr, &len)) {
+    ::close(fd);
+    *error = "can: loopback bus path too long for a Unix socket: " + own_path_;
+    return false;
+  }
+  ::unlink(own_path_.c_str());
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&addr), len) != 0) {
+    *error = "can: bind " + own_path_ + ": " + std::strerror(errno);
+    ::close(fd);
+    return false;
+  }
+  int rcvbuf = 1 << 20;
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof rcvbuf);
+  descriptor_.assign(fd);
+  open_ = true;
+  return true;
+}
+
+void LoopbackBus::Start(FrameHandler handler) {
+  handler_ = std::move(handler);
+  WaitRead();
+}
+
+void LoopbackBus::WaitRead() {
+  if (!open_) return;
+  descriptor_.async_wait(boost::asio::posix::stream_descriptor::wait_read,
+                         [this](const boost::system::error_code& ec) {
+                           if (ec || !open_) return;
+                           Drain();
+                           WaitRead();
+                         });
+}
+
+bool LoopbackBus::Wanted(uint32_t id) const {
+  if (ids_.empty()) return true;
+  if (id & (CAN_EFF_FLAG | CAN_ERR_FLAG)) return false;
+  for (uint32_t w : ids_) {
+    if ((id & CAN_SFF_MASK) == w) return true;
+  }
+  return false;
+}
+
+void LoopbackBus::Drain() {
+  for (int i = 0; i < 256; ++i) {
+    can_frame f;
+    const ssize_t n = ::recv(descriptor_.native_handle(), &f, sizeof f, MSG_DONTWAIT);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return;  // EAGAIN: drained
+    }
+    if (n != static_cast<ssize_t>(sizeof f)) {
+      ++stats_.rx_dropped;  // not a CAN_MTU datagram: not a frame
+      continue;
+    }
+    if (!Wanted(f.can_id)) {
+      ++stats_.filtered;
+      continue;
+    }
+    ++stats_.rx_frames;
+    if (handler_) {
+      timespec ts;
+      ::clock_gettime(CLOCK_REALTIME, &ts);
+      handler_(f, static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec));
+    }
+  }
+}
+
+void LoopbackBus::RefreshPeers() {
+  struct stat st{};
+  if (::stat(dir_.c_str(), &st) != 0) return;
+  timespec now;
+  ::clock_gettime(CLOCK_REALTIME, &now);
+  const double mtime = static_cast<double>(st.st_mtim.tv_sec) + 1e-9 * static_cast<double>(st.st_mtim.tv_nsec);
+  const double t_now = static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
+  // The directory's mtime has coarse (jiffy) resolution: while it is recent, a
+  // second change could hide behind an equal stamp, so re-read every time then.
+  if (peers_valid_ && mtime == peers_mtime_ && t_now - mtime > 0.05) return;
+  peers_mtime_ = mtime;
+  peers_valid_ = true;
+  peers_.clear();
+  DIR* d = ::opendir(dir_.c_str());
+  if (d == nullptr) return;
+  while (dirent* e = ::readdir(d)) {
+    if (std::strncmp(e->d_name, "node-", 5) != 0) continue;
+    if (own_name_ == e->d_name) continue;
+    peers_.push_back(dir_ + "/" + e->d_name);
+  }
+  ::closedir(d);
+}
+
+bool LoopbackBus::Send(const can_frame& frame) {
+  if (!open_) {
+    ++stats_.tx_dropped;
+    return false;
+  }
+  RefreshPeers();
+  bool all_ok = true;
+  for (size_t i = 0; i < peers_.size();) {
+    sockaddr_un addr;
+    socklen_t len;
+    if (!MakeAddr(peers_[i], &addr, &len)) {
+      ++i;
+      continue;
+    }
+    const ssize_t n = ::sendto(descriptor_.native_handle(), &frame, sizeof frame,
+                               MSG_DONTWAIT | MSG_NOSIGNAL,
+                               reinterpret_cast<sockaddr*>(&addr), len);
+    if (n < 0 && (errno == ECONNREFUSED || errno == ENOENT)) {
+      // A node that died without cleaning up (ECONNREFUSED) or just left (ENOENT).
+      if (errno == ECONNREFUSED) ::unlink(peers_[i].c_str());
+      peers_.erase(peers_.begin() + static_cast<std::ptrdiff_t>(i));
+      continue;
+    }
+    if (n < 0) {
+      // EAGAIN: that node's receive queue is full; like a CAN node that is not
+      // keeping up, it loses the frame.
+      all_ok = false;
+    }
+    ++i;
+  }
+  if (all_ok) {
+    ++stats_.tx_frames;
+  } else {
+    ++stats_.tx_dropped;
+  }
+  return all_ok;
+}
+
+void LoopbackBus::Close() {
+  if (!open_) return;
+  open_ = false;
+  boost::system::error_code ec;
+  descriptor_.cancel(ec);
+  descriptor_.close(ec);
+  ::unlink(own_path_.c_str());
+}
+
+}  // namespace irslam::drivers

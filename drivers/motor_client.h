@@ -1,0 +1,105 @@
+// Client side of the motor controller protocol (proto/irslam.dbc), as pure code:
+// frames in, timestamped wheel ticks / IR samples / controller status out, and
+// command frames built on request. No socket or clock inside: the caller passes
+// its own notion of "now" (robot seconds) for timeout detection.
+#ifndef IRSLAM_DRIVERS_MOTOR_CLIENT_H_
+#define IRSLAM_DRIVERS_MOTOR_CLIENT_H_
+
+#include <linux/can.h>
+
+#include <array>
+#include <cstdint>
+#include <optional>
+
+#include "proto/codec.h"
+#include "slam/types.h"
+
+namespace irslam::drivers {
+
+// Unwraps a wrapping 16-bit counter into a monotonic-ish 64-bit value by taking
+// the nearest representative of each new sample (valid while consecutive samples
+// differ by less than half the range).
+class Unwrapper16 {
+ public:
+  int64_t Update(uint16_t raw);
+  // The next sample becomes `base` + 0 (used after a controller reset).
+  void Rebase(int64_t base) {
+    rebase_ = true;
+    base_ = base;
+  }
+  bool initialized() const { return initialized_; }
+  int64_t value() const { return value_; }
+
+ private:
+  bool initialized_ = false;
+  bool rebase_ = false;
+  int64_t base_ = 0;
+  uint16_t last_raw_ = 0;
+  int64_t value_ = 0;
+};
+
+struct MotorClientCounters {
+  uint64_t encoder_frames = 0;
+  uint64_t ir_samples = 0;
+  uint64_t status_frames = 0;
+  uint64_t unknown_id = 0;
+  uint64_t wrong_dlc = 0;
+  uint64_t ignored = 0;         // well-formed frames not meant for us (e.g. other commands)
+  uint64_t seq_gap_encoder = 0;
+  uint64_t seq_gap_ir = 0;
+  uint64_t seq_gap_status = 0;
+  uint64_t ir_unpaired = 0;     // IR_A/IR_B halves that never found their partner
+  uint64_t controller_resets = 0;
+};
+
+struct MotorClientOptions {
+  // Encoder/status silence beyond this (robot seconds) means the controller is lost.
+  double timeout_s = 0.1;
+};
+
+class MotorClient {
+ public:
+  struct Event {
+    std::optional<WheelTicks> ticks;
+    std::optional<std::array<uint16_t, kNumIrSensors>> ir_adc;
+    double ir_t = 0;
+    std::optional<proto::ControllerStatus> status;
+  };
+
+  explicit MotorClient(MotorClientOptions options) : options_(options) {}
+
+  // Decodes one frame received at robot time `now_s`.
+  Event Handle(const can_frame& frame, double now_s);
+
+  can_frame MakeCommand(const WheelCommand& cmd);
+  can_frame MakeHeartbeat(uint8_t daemon_state);
+
+  // True while encoder frames and controller status arrive within timeout_s.
+  bool ControllerAlive(double now_s) const;
+  // Why the controller is considered lost (empty when alive).
+  const char* LossReason(double now_s) const;
+
+  const MotorClientCounters& counters() const { return counters_; }
+  const std::optional<proto::ControllerStatus>& last_status() const { return last_status_; }
+
+ private:
+  double ControllerTime(uint16_t stamp_ms);
+  void CheckSeq(std::optional<uint8_t>* last, uint8_t seq, uint64_t* gaps);
+
+  MotorClientOptions options_;
+  MotorClientCounters counters_;
+  Unwrapper16 clock_;
+  Unwrapper16 left_;
+  Unwrapper16 right_;
+  std::optional<uint8_t> seq_encoder_, seq_ir_, seq_status_;
+  std::optional<proto::IrA> pending_ir_a_;
+  std::optional<proto::ControllerStatus> last_status_;
+  double last_encoder_rx_ = -1e9;
+  double last_status_rx_ = -1e9;
+  uint8_t cmd_seq_ = 0;
+  uint8_t hb_seq_ = 0;
+};
+
+}  // namespace irslam::drivers
+
+#endif  // IRSLAM_DRIVERS_MOTOR_CLIENT_H_

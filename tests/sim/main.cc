@@ -1,0 +1,216 @@
+// irslam-sim: the simulated motor controller and world (contracts.md §2).
+//   irslam-sim run   --world W.json [--seed S] [--max-time SECONDS] --map-out map.json --truth-out truth.json
+//   irslam-sim serve --can IFACE --world W.json [--seed S] [--time-scale K] [--truth-out truth.json]
+#include <CLI/CLI.hpp>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+
+#include "control/robot_core.h"
+#include "daemon/config.h"
+#include "drivers/can_bus.h"
+#include "proto/codec.h"
+#include "tests/sim/sim_controller.h"
+
+namespace irslam::sim {
+namespace {
+
+constexpr int kExitUsage = 2;
+
+SimOptions SimOptionsFrom(const control::CoreOptions& core) {
+  SimOptions o;
+  o.geometry = core.slam.geometry;
+  o.mounts = core.slam.mounts;
+  o.ir = core.ir;
+  return o;
+}
+
+bool WriteJson(const std::string& path, const nlohmann::json& j) {
+  if (path.empty()) return true;
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!out) return false;
+    out << j.dump(1) << "\n";
+    if (!out) return false;
+  }
+  return std::rename(tmp.c_str(), path.c_str()) == 0;
+}
+
+struct Common {
+  std::string world_path;
+  std::string config_path;
+  std::optional<uint64_t> seed;
+  std::string truth_out;
+};
+
+bool Load(const Common& c, World* world, control::CoreOptions* core, uint64_t* seed) {
+  std::string error;
+  auto w = LoadWorldFile(c.world_path, &error);
+  if (!w) {
+    std::fprintf(stderr, "irslam-sim: %s\n", error.c_str());
+    return false;
+  }
+  *core = control::DefaultCoreOptions();
+  if (!c.config_path.empty() && !LoadConfigFile(c.config_path, core, &error)) {
+    std::fprintf(stderr, "irslam-sim: %s\n", error.c_str());
+    return false;
+  }
+  *world = *w;
+  *seed = c.seed.value_or(w->seed.value_or(1));
+  return true;
+}
+
+int Run(const Common& c, double max_time, const std::string& map_out) {
+  World world;
+  control::CoreOptions core_opts;
+  uint64_t seed;
+  if (!Load(c, &world, &core_opts, &seed)) return kExitUsage;
+  SimController sim(world, SimOptionsFrom(core_opts), seed);
+  control::RobotCore core(core_opts);
+
+  // Same frames, same core as the daemon; only the bus and the clock are in-process.
+  const double io_dt = 0.002;
+  const double period = core_opts.period_s;
+  double next_tick = period;
+  bool started = false;
+  std::vector<can_frame> frames;
+  double t = 0;
+  for (; t < max_time; t += io_dt) {
+    frames.clear();
+    sim.AdvanceTo(t + io_dt, &frames);
+    for (const can_frame& f : frames) core.OnFrame(f, t + io_dt);
+    if (t + io_dt >= next_tick - 1e-9) {
+      next_tick += period;
+      if (!started && t > 0.3) {
+        std::string why;
+        if (!core.Start(t + io_dt, &why)) {
+          std::fprintf(stderr, "irslam-sim: cannot start the mission: %s\n", why.c_str());
+          return 1;
+        }
+        started = true;
+      }
+      for (const can_frame& f : core.Tick(t + io_dt)) sim.HandleFrame(f);
+      if (started && (core.state() == control::MissionState::kDone ||
+                      core.state() == control::MissionState::kIdle)) {
+        break;
+      }
+    }
+  }
+  if (!WriteJson(map_out, core.Map())) {
+    std::fprintf(stderr, "irslam-sim: cannot write %s\n", map_out.c_str());
+    return 1;
+  }
+  if (!WriteJson(c.truth_out, sim.Truth())) {
+    std::fprintf(stderr, "irslam-sim: cannot write %s\n", c.truth_out.c_str());
+    return 1;
+  }
+  const auto status = core.Status(t);
+  std::fprintf(stderr,
+               "irslam-sim: %s after %.1f s robot time, %.1f m driven, %llu collisions, "
+               "min clearance %.3f m\n",
+               status["state"].get<std::string>().c_str(), t, core.slam().distance_m(),
+               static_cast<unsigned long long>(sim.collisions()), sim.min_clearance());
+  if (core.state() != control::MissionState::kDone) {
+    std::fprintf(stderr, "irslam-sim: mission did not finish: state %s, %s\n",
+                 status["state"].get<std::string>().c_str(),
+                 t >= max_time ? "--max-time reached" : status["reason"].get<std::string>().c_str());
+    return 1;
+  }
+  return 0;
+}
+
+int Serve(const Common& c, const std::string& iface, double time_scale) {
+  World world;
+  control::CoreOptions core_opts;
+  uint64_t seed;
+  if (!Load(c, &world, &core_opts, &seed)) return kExitUsage;
+  SimController sim(world, SimOptionsFrom(core_opts), seed);
+
+  boost::asio::io_context io;
+  std::string error;
+  auto bus = drivers::OpenCanBus(io, {iface, {proto::kWheelCmdId, proto::kDaemonHeartbeatId}},
+                                 &error);
+  if (!bus) {
+    std::fprintf(stderr, "irslam-sim: %s\n", error.c_str());
+    return 1;
+  }
+  bus->Start([&](const can_frame& f, double) { sim.HandleFrame(f); });
+
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  const auto tick = std::chrono::microseconds(1000);
+  boost::asio::steady_timer timer(io);
+  timer.expires_at(start + tick);
+  std::vector<can_frame> frames;
+  std::function<void(const boost::system::error_code&)> on_tick =
+      [&](const boost::system::error_code& ec) {
+        if (ec) return;
+        const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+        frames.clear();
+        sim.AdvanceTo(wall * time_scale, &frames);
+        for (const can_frame& f : frames) bus->Send(f);
+        timer.expires_at(timer.expiry() + tick);
+        if (timer.expiry() < Clock::now()) timer.expires_at(Clock::now() + tick);
+        timer.async_wait(on_tick);
+      };
+  timer.async_wait(on_tick);
+
+  boost::asio::signal_set signals(io, SIGINT, SIGTERM);
+  signals.async_wait([&](const boost::system::error_code&, int) {
+    timer.cancel();
+    bus->Close();
+    io.stop();
+  });
+  std::fprintf(stderr, "irslam-sim: serving world '%s' on %s at time scale %g\n",
+               world.name.c_str(), bus->name().c_str(), time_scale);
+  io.run();
+  if (!WriteJson(c.truth_out, sim.Truth())) {
+    std::fprintf(stderr, "irslam-sim: cannot write %s\n", c.truth_out.c_str());
+    return 1;
+  }
+  std::fprintf(stderr, "irslam-sim: stopped at %.1f s robot time, %llu collisions\n", sim.time(),
+               static_cast<unsigned long long>(sim.collisions()));
+  return 0;
+}
+
+}  // namespace
+}  // namespace irslam::sim
+
+int main(int argc, char** argv) {
+  CLI::App app{"irslam-sim: simulated motor controller, IR sensors and world for irslamd"};
+  app.require_subcommand(1);
+  irslam::sim::Common common;
+  const auto add_common = [&](CLI::App* sub) {
+    sub->add_option("--world", common.world_path, "World file (JSON, contracts §1)")->required();
+    sub->add_option("--seed", common.seed, "Random seed (default: the world's, else 1)");
+    sub->add_option("--truth-out", common.truth_out, "Write the truth file here (contracts §5)");
+    sub->add_option("--config", common.config_path,
+                    "irslamd config file (robot geometry, sensors; and the core in 'run')");
+  };
+  auto* run = app.add_subcommand("run", "Run the whole mission in process, as fast as possible");
+  add_common(run);
+  double max_time = 900;
+  std::string map_out;
+  run->add_option("--max-time", max_time, "Robot-time limit in seconds")->check(CLI::PositiveNumber);
+  run->add_option("--map-out", map_out, "Write the map here (contracts §4)");
+
+  auto* serve = app.add_subcommand("serve", "Be the motor controller on a CAN bus");
+  add_common(serve);
+  std::string iface;
+  double time_scale = 1.0;
+  serve->add_option("--can", iface, "vcan0, can0 or unix:PATH")->required();
+  serve->add_option("--time-scale", time_scale, "Robot time runs K times faster than wall time")
+      ->check(CLI::Range(0.01, 1000.0));
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  if (*run) return irslam::sim::Run(common, max_time, map_out);
+  return irslam::sim::Serve(common, iface, time_scale);
+}

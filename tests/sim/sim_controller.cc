@@ -1,0 +1,187 @@
+#include "tests/sim/sim_controller.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "proto/codec.h"
+
+namespace irslam::sim {
+
+SimController::SimController(World world, SimOptions options, uint64_t seed)
+    : world_(std::move(world)),
+      options_(options),
+      calibration_(options_.ir),
+      segments_(world_.Segments()),
+      rng_(seed),
+      pose_(world_.start),
+      odom_pose_(world_.start) {}
+
+void SimController::HandleFrame(const can_frame& frame) {
+  const proto::DecodeResult r = proto::Decode(frame);
+  if (!r.ok()) return;
+  if (const auto* c = std::get_if<proto::WheelCommand>(&r.message)) {
+    const double vmax = options_.geometry.max_wheel_speed_mps;
+    enabled_ = c->enable;
+    target_l_ = c->enable ? std::clamp(c->left_mps, -vmax, vmax) : 0.0;
+    target_r_ = c->enable ? std::clamp(c->right_mps, -vmax, vmax) : 0.0;
+    last_cmd_t_ = t_;
+  }
+}
+
+double SimController::Clearance(const Pose2& p, uint8_t* bumpers) const {
+  double best = 1e9;
+  Vec2 contact{};
+  for (const Segment& s : segments_) {
+    Vec2 c;
+    const double d = PointSegmentDistance({p.x, p.y}, s, &c);
+    if (d < best) {
+      best = d;
+      contact = c;
+    }
+  }
+  if (bumpers) {
+    *bumpers = 0;
+    if (best < options_.geometry.radius_m + 0.003) {
+      const double a = NormalizeAngle(std::atan2(contact.y - p.y, contact.x - p.x) - p.theta);
+      if (a > -0.35) *bumpers |= proto::kBumperLeft;
+      if (a < 0.35) *bumpers |= proto::kBumperRight;
+    }
+  }
+  return best;
+}
+
+void SimController::PhysicsStep(double dt) {
+  // The controller's safety stop: no command for command_timeout_s -> wheels to zero.
+  const bool timed_out = t_ - last_cmd_t_ > options_.command_timeout_s;
+  const double tl = timed_out ? 0.0 : target_l_;
+  const double tr = timed_out ? 0.0 : target_r_;
+  const double dv = options_.wheel_accel_mps2 * dt;
+  vl_ = std::clamp(tl, vl_ - dv, vl_ + dv);
+  vr_ = std::clamp(tr, vr_ - dv, vr_ + dv);
+
+  // Ground motion: true radii differ slightly from nominal, and wheels slip.
+  std::normal_distribution<double> slip(0.0, world_.noise.slip_sigma);
+  const double gl = vl_ * dt * (1.0 + world_.noise.wheel_radius_error_left) * (1.0 + slip(rng_));
+  const double gr = vr_ * dt * (1.0 + world_.noise.wheel_radius_error_right) * (1.0 + slip(rng_));
+  const double ds = 0.5 * (gl + gr);
+  const double dth = (gr - gl) / options_.geometry.wheel_base_m;
+  const double mid = pose_.theta + 0.5 * dth;
+  Pose2 next{pose_.x + ds * std::cos(mid), pose_.y + ds * std::sin(mid),
+             NormalizeAngle(pose_.theta + dth)};
+
+  const double before = Clearance(pose_, nullptr);
+  uint8_t bump = 0;
+  const double after = Clearance(next, &bump);
+  const double radius = options_.geometry.radius_m;
+  if (after < radius && after < before) {
+    // Blocked: the robot does not move and the motors stall (no encoder counts).
+    if (!in_contact_) ++collisions_;
+    in_contact_ = true;
+    Clearance(pose_, &bump);
+    bumpers_ = bump ? bump : static_cast<uint8_t>(proto::kBumperLeft | proto::kBumperRight);
+    vl_ = vr_ = 0;
+    return;
+  }
+  in_contact_ = after < radius + 0.003;
+  bumpers_ = in_contact_ ? bump : 0;
+  pose_ = next;
+  min_clearance_ = std::min(min_clearance_, after);
+
+  // Encoders see the wheel rotation (nominal radius), quantised to whole counts.
+  const double r = options_.geometry.wheel_radius_m;
+  wheel_angle_l_ += vl_ * dt / r;
+  wheel_angle_r_ += vr_ * dt / r;
+  const double cpr = options_.geometry.counts_per_rev;
+  counts_l_ = static_cast<int64_t>(std::floor(wheel_angle_l_ / (2 * M_PI) * cpr));
+  counts_r_ = static_cast<int64_t>(std::floor(wheel_angle_r_ / (2 * M_PI) * cpr));
+}
+
+void SimController::SampleIr(std::vector<can_frame>* out) {
+  std::array<uint16_t, kNumIrSensors> adc{};
+  const double half_beam = 0.5 * world_.noise.ir_beam_deg * M_PI / 180.0;
+  for (int i = 0; i < kNumIrSensors; ++i) {
+    const Pose2 s = Compose(pose_, {options_.mounts[i].x, options_.mounts[i].y,
+                                    options_.mounts[i].theta});
+    // The beam returns the nearest surface inside its cone.
+    std::optional<double> best;
+    constexpr int kRays = 5;
+    for (int k = 0; k < kRays; ++k) {
+      const double a = s.theta - half_beam + 2 * half_beam * k / (kRays - 1);
+      const auto d = RayCast(segments_, {s.x, s.y}, a, 10.0);
+      if (d && (!best || *d < *best)) best = d;
+    }
+    double volts = best ? calibration_.DistanceToVolts(*best) : 0.3;
+    std::normal_distribution<double> noise(0.0, world_.noise.ir_voltage_sigma_rel * volts);
+    volts = std::max(0.0, volts + noise(rng_));
+    adc[i] = calibration_.VoltsToCounts(volts);
+  }
+  const auto stamp = static_cast<uint16_t>(static_cast<int64_t>(std::llround(t_ * 1000)) & 0xFFFF);
+  proto::IrA a{seq_ir_, stamp, {adc[0], adc[1], adc[2]}};
+  proto::IrB b{seq_ir_, {adc[3], adc[4], adc[5], adc[6]}};
+  ++seq_ir_;
+  out->push_back(proto::Encode(a));
+  out->push_back(proto::Encode(b));
+}
+
+void SimController::AdvanceTo(double t, std::vector<can_frame>* out) {
+  const double dt = options_.physics_dt_s;
+  while (t_ + dt <= t + 1e-12) {
+    PhysicsStep(dt);
+    t_ += dt;
+    const auto stamp =
+        static_cast<uint16_t>(static_cast<int64_t>(std::llround(t_ * 1000)) & 0xFFFF);
+    if (t_ >= next_encoder_ - 1e-9) {
+      next_encoder_ += options_.encoder_period_s;
+      out->push_back(proto::Encode(proto::EncoderCounts{
+          stamp, static_cast<uint16_t>(counts_l_ & 0xFFFF),
+          static_cast<uint16_t>(counts_r_ & 0xFFFF), seq_enc_++}));
+      // Dead reckoning from the same counts (truth file's baseline).
+      const double k = options_.geometry.metres_per_count();
+      const double dl = static_cast<double>(counts_l_ - odom_counts_l_) * k;
+      const double dr = static_cast<double>(counts_r_ - odom_counts_r_) * k;
+      odom_counts_l_ = counts_l_;
+      odom_counts_r_ = counts_r_;
+      const double ds = 0.5 * (dl + dr), dth = (dr - dl) / options_.geometry.wheel_base_m;
+      const double mid = odom_pose_.theta + 0.5 * dth;
+      odom_pose_ = {odom_pose_.x + ds * std::cos(mid), odom_pose_.y + ds * std::sin(mid),
+                    NormalizeAngle(odom_pose_.theta + dth)};
+    }
+    if (t_ >= next_status_ - 1e-9) {
+      next_status_ += options_.status_period_s;
+      const bool timed_out = t_ - last_cmd_t_ > options_.command_timeout_s;
+      proto::ControllerStatus s;
+      s.state = (enabled_ && !timed_out) ? proto::ControllerState::kDriving
+                                         : proto::ControllerState::kReady;
+      s.faults = timed_out && last_cmd_t_ > 0 ? proto::kFaultCommandTimeout : 0;
+      s.bumpers = bumpers_;
+      s.battery_v = 14.4;
+      s.timestamp_ms = stamp;
+      s.seq = seq_status_++;
+      out->push_back(proto::Encode(s));
+    }
+    if (t_ >= next_ir_ - 1e-9) {
+      std::uniform_real_distribution<double> jitter(-world_.noise.ir_period_jitter_s,
+                                                    world_.noise.ir_period_jitter_s);
+      next_ir_ = t_ + world_.noise.ir_period_s + jitter(rng_);
+      SampleIr(out);
+    }
+    if (t_ >= next_truth_ - 1e-9) {
+      next_truth_ += options_.truth_period_s;
+      truth_.push_back({t_, pose_.x, pose_.y, pose_.theta});
+      odom_.push_back({t_, odom_pose_.x, odom_pose_.y, odom_pose_.theta});
+    }
+  }
+}
+
+nlohmann::json SimController::Truth() const {
+  nlohmann::json tr = nlohmann::json::array(), od = nlohmann::json::array();
+  for (const auto& p : truth_) tr.push_back(p);
+  for (const auto& p : odom_) od.push_back(p);
+  return {{"world", world_.name},
+          {"trajectory", tr},
+          {"odometry", od},
+          {"collisions", collisions_},
+          {"min_clearance", min_clearance_}};
+}
+
+}  // namespace irslam::sim

@@ -1,0 +1,65 @@
+// Simulated worlds (contracts.md §1): a rectangular or orthogonal-polygon room with
+// axis-aligned boxes, a start pose, an optional seed and noise parameters.
+#ifndef IRSLAM_TESTS_SIM_WORLD_H_
+#define IRSLAM_TESTS_SIM_WORLD_H_
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "slam/types.h"
+
+namespace irslam::sim {
+
+struct Vec2 {
+  double x = 0, y = 0;
+};
+
+struct Segment {
+  Vec2 a, b;
+};
+
+struct Box {
+  double xmin, ymin, xmax, ymax;
+};
+
+// Simulator noise parameters (the world file's optional "noise" object).
+struct SimNoise {
+  double wheel_radius_error_left = +0.0006;   // relative error of the true radius
+  double wheel_radius_error_right = -0.0006;
+  double slip_sigma = 0.01;                   // relative, per physics step, per wheel
+  double ir_voltage_sigma_rel = 0.015;        // 1.5 % of the output voltage
+  double ir_period_s = 0.038;
+  double ir_period_jitter_s = 0.004;
+  double ir_beam_deg = 5.0;
+};
+
+struct World {
+  std::string name;
+  std::vector<Vec2> outline;  // closed orthogonal polygon (the room)
+  std::vector<Box> objects;
+  Pose2 start;
+  std::optional<uint64_t> seed;
+  SimNoise noise;
+
+  std::vector<Segment> Segments() const;
+  // Bounding box of the room outline.
+  Box Bounds() const;
+};
+
+// Parses a world file's text; on error returns nullopt and a one-line *error
+// naming the field.
+std::optional<World> ParseWorld(std::string_view text, std::string* error);
+std::optional<World> LoadWorldFile(const std::string& path, std::string* error);
+
+// Ray cast: distance along the ray from p in direction angle to the nearest
+// segment, or nullopt within max_range.
+std::optional<double> RayCast(const std::vector<Segment>& segs, Vec2 p, double angle,
+                              double max_range);
+// Distance from a point to a segment.
+double PointSegmentDistance(Vec2 p, const Segment& s, Vec2* closest);
+
+}  // namespace irslam::sim
+
+#endif  // IRSLAM_TESTS_SIM_WORLD_H_
