@@ -9,11 +9,14 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <sstream>
 
 #include "control/robot_core.h"
 #include "daemon/config.h"
+#include "daemon/map_svg.h"
 #include "drivers/can_bus.h"
 #include "proto/codec.h"
+#include "proto/json_text.h"
 #include "tests/sim/sim_controller.h"
 
 namespace irslam::sim {
@@ -41,6 +44,13 @@ bool WriteJson(const std::string& path, const nlohmann::json& j) {
   return std::rename(tmp.c_str(), path.c_str()) == 0;
 }
 
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
 struct Common {
   std::string world_path;
   std::string config_path;
@@ -65,7 +75,7 @@ bool Load(const Common& c, World* world, control::CoreOptions* core, uint64_t* s
   return true;
 }
 
-int Run(const Common& c, double max_time, const std::string& map_out) {
+int Run(const Common& c, double max_time, const std::string& map_out, const std::string& svg_out) {
   World world;
   control::CoreOptions core_opts;
   uint64_t seed;
@@ -108,6 +118,16 @@ int Run(const Common& c, double max_time, const std::string& map_out) {
   if (!WriteJson(c.truth_out, sim.Truth())) {
     std::fprintf(stderr, "irslam-sim: cannot write %s\n", c.truth_out.c_str());
     return 1;
+  }
+  if (!svg_out.empty()) {
+    std::string error;
+    auto world_json = ParseJsonText(ReadText(c.world_path), &error);
+    std::ofstream svg(svg_out);
+    svg << RenderMapSvg(core.Map(), sim.Truth(), world_json.value_or(nlohmann::json()));
+    if (!svg) {
+      std::fprintf(stderr, "irslam-sim: cannot write %s\n", svg_out.c_str());
+      return 1;
+    }
   }
   const auto status = core.Status(t);
   std::fprintf(stderr,
@@ -198,6 +218,8 @@ int main(int argc, char** argv) {
   std::string map_out;
   run->add_option("--max-time", max_time, "Robot-time limit in seconds")->check(CLI::PositiveNumber);
   run->add_option("--map-out", map_out, "Write the map here (contracts §4)");
+  std::string svg_out;
+  run->add_option("--svg", svg_out, "Draw the map, the true room and trajectories as SVG");
 
   auto* serve = app.add_subcommand("serve", "Be the motor controller on a CAN bus");
   add_common(serve);
@@ -211,6 +233,6 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-  if (*run) return irslam::sim::Run(common, max_time, map_out);
+  if (*run) return irslam::sim::Run(common, max_time, map_out, svg_out);
   return irslam::sim::Serve(common, iface, time_scale);
 }

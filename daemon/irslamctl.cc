@@ -1,0 +1,187 @@
+// irslamctl: command-line client of irslamd (contracts.md §3).
+//   irslamctl [--socket PATH] status [--json] | start | stop |
+//             map [--out map.json] [--svg map.svg] | wait --state STATE [--timeout S] | watch
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "daemon/map_svg.h"
+#include "daemon/rpc_client.h"
+
+namespace irslam {
+namespace {
+
+constexpr double kCallTimeout = 5.0;
+
+int Fail(const std::string& msg) {
+  std::fprintf(stderr, "irslamctl: %s\n", msg.c_str());
+  return 1;
+}
+
+std::string Num(const nlohmann::json& j, int prec = 3) {
+  if (!j.is_number()) return "-";
+  char b[32];
+  std::snprintf(b, sizeof b, "%.*f", prec, j.get<double>());
+  return b;
+}
+
+std::string StatusLine(const nlohmann::json& s) {
+  const auto& p = s.value("pose", nlohmann::json::array({0, 0, 0}));
+  const auto& can = s.value("can", nlohmann::json::object());
+  const auto& per = s.value("period", nlohmann::json::object());
+  char b[512];
+  std::snprintf(b, sizeof b,
+                "%-14s %-12s t=%7.1fs pose=(%6.2f,%6.2f,%6.1fdeg) lines=%-3d objects=%-2d "
+                "can rx=%llu tx=%llu drop=%llu link=%s jitter=%.1fms overruns=%llu",
+                s.value("state", "?").c_str(), s.value("behaviour", "").c_str(),
+                s.value("robot_time", 0.0), p[0].get<double>(), p[1].get<double>(),
+                p[2].get<double>() * 180 / M_PI, s.value("lines", 0), s.value("objects", 0),
+                can.value("rx", 0ULL), can.value("tx", 0ULL),
+                can.value("rx_dropped", 0ULL) + can.value("tx_dropped", 0ULL),
+                can.value("link_up", false) ? "up" : "DOWN", per.value("jitter_max", 0.0) * 1e3,
+                per.value("overruns", 0ULL));
+  return b;
+}
+
+void PrintStatus(const nlohmann::json& s) {
+  std::printf("state:      %s", s.value("state", "?").c_str());
+  if (!s.value("reason", "").empty()) std::printf(" (%s)", s.value("reason", "").c_str());
+  std::printf("\nbehaviour:  %s\n", s.value("behaviour", "").c_str());
+  const auto& p = s["pose"];
+  const auto& sd = s.value("pose_std", nlohmann::json::array({0, 0, 0}));
+  std::printf("pose:       x=%s y=%s theta=%s rad  (std %s m, %s m, %s rad)\n", Num(p[0]).c_str(),
+              Num(p[1]).c_str(), Num(p[2]).c_str(), Num(sd[0]).c_str(), Num(sd[1]).c_str(),
+              Num(sd[2]).c_str());
+  std::printf("map:        %d lines, %d objects, %s m driven\n", s.value("lines", 0),
+              s.value("objects", 0), Num(s.value("distance", 0.0), 1).c_str());
+  const auto& ctl = s.value("controller", nlohmann::json::object());
+  std::printf("controller: %s, faults=0x%02x bumpers=0x%02x battery=%s V\n",
+              ctl.value("alive", false) ? "alive" : "LOST", ctl.value("faults", 0),
+              ctl.value("bumpers", 0), Num(ctl.value("battery", 0.0), 2).c_str());
+  const auto& can = s.value("can", nlohmann::json::object());
+  std::printf("can:        %s link=%s rx=%llu tx=%llu rx_dropped=%llu tx_dropped=%llu errors=%llu\n",
+              can.value("iface", "?").c_str(), can.value("link_up", false) ? "up" : "DOWN",
+              can.value("rx", 0ULL), can.value("tx", 0ULL), can.value("rx_dropped", 0ULL),
+              can.value("tx_dropped", 0ULL), can.value("error_frames", 0ULL));
+  const auto& fr = s.value("frames", nlohmann::json::object());
+  std::printf("frames:     encoder=%llu ir=%llu status=%llu unknown_id=%llu wrong_dlc=%llu "
+              "seq_gaps=%llu/%llu/%llu\n",
+              fr.value("encoder", 0ULL), fr.value("ir", 0ULL), fr.value("status", 0ULL),
+              fr.value("unknown_id", 0ULL), fr.value("wrong_dlc", 0ULL),
+              fr.value("seq_gap_encoder", 0ULL), fr.value("seq_gap_ir", 0ULL),
+              fr.value("seq_gap_status", 0ULL));
+  const auto& per = s.value("period", nlohmann::json::object());
+  std::printf("period:     %s s target, %llu ticks, %llu overruns, jitter mean %s ms max %s ms\n",
+              Num(per.value("target", 0.0)).c_str(), per.value("ticks", 0ULL),
+              per.value("overruns", 0ULL), Num(per.value("jitter_mean", 0.0) * 1e3, 2).c_str(),
+              Num(per.value("jitter_max", 0.0) * 1e3, 2).c_str());
+  std::printf("uptime:     %s s\n", Num(s.value("uptime", 0.0), 1).c_str());
+}
+
+bool WriteFile(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!out) return false;
+    out << text;
+    if (!out) return false;
+  }
+  return std::rename(tmp.c_str(), path.c_str()) == 0;
+}
+
+}  // namespace
+}  // namespace irslam
+
+int main(int argc, char** argv) {
+  using namespace irslam;
+  CLI::App app{"irslamctl: control and watch irslamd"};
+  std::string socket_path;
+  app.add_option("--socket", socket_path,
+                 "irslamd control socket (default $IRSLAM_SOCKET or /run/irslam/irslamd.sock)");
+  app.require_subcommand(1);
+  bool json_out = false;
+  auto* status = app.add_subcommand("status", "Show the daemon's status");
+  status->add_flag("--json", json_out, "Print the raw JSON");
+  auto* start = app.add_subcommand("start", "Start the mission (exploration)");
+  auto* stop = app.add_subcommand("stop", "Stop the robot");
+  std::string out_path, svg_path;
+  auto* map = app.add_subcommand("map", "Fetch the map");
+  map->add_option("--out", out_path, "Write the map JSON here (default: stdout)");
+  map->add_option("--svg", svg_path, "Also draw it as SVG");
+  std::string want_state;
+  double timeout = 0;
+  auto* wait = app.add_subcommand("wait", "Wait until the mission reaches a state");
+  wait->add_option("--state", want_state, "idle, wall_follow, model, go_to_p1, contour_follow, done, fault")
+      ->required();
+  wait->add_option("--timeout", timeout, "Give up after this many seconds (default: never)");
+  auto* watch = app.add_subcommand("watch", "Show state, pose, map and CAN counters live");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  if (socket_path.empty()) socket_path = DefaultSocketPath();
+  RpcClient client;
+  std::string error;
+  if (!client.Connect(socket_path, &error)) return Fail(error);
+
+  if (*status) {
+    auto s = client.Call("status", nlohmann::json::object(), kCallTimeout, &error);
+    if (!s) return Fail(error);
+    if (json_out) {
+      std::printf("%s\n", s->dump(2).c_str());
+    } else {
+      PrintStatus(*s);
+    }
+    return 0;
+  }
+  if (*start || *stop) {
+    auto r = client.Call(*start ? "start" : "stop", nlohmann::json::object(), kCallTimeout, &error);
+    if (!r) return Fail(error);
+    std::printf("state: %s\n", r->value("state", "?").c_str());
+    return 0;
+  }
+  if (*map) {
+    auto m = client.Call("map", nlohmann::json::object(), 30, &error);
+    if (!m) return Fail(error);
+    if (out_path.empty() && svg_path.empty()) {
+      std::printf("%s\n", m->dump(1).c_str());
+    }
+    if (!out_path.empty() && !WriteFile(out_path, m->dump(1) + "\n")) {
+      return Fail("cannot write " + out_path);
+    }
+    if (!svg_path.empty() && !WriteFile(svg_path, RenderMapSvg(*m, nullptr, nullptr))) {
+      return Fail("cannot write " + svg_path);
+    }
+    return 0;
+  }
+  if (*wait || *watch) {
+    auto r = client.Call("subscribe", {{"rate", *wait ? 20 : 4}}, kCallTimeout, &error);
+    if (!r) return Fail(error);
+    const auto t0 = std::chrono::steady_clock::now();
+    const bool tty = ::isatty(STDOUT_FILENO);
+    for (;;) {
+      double left = 3600 * 24;
+      if (*wait && timeout > 0) {
+        left = timeout - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (left <= 0) return Fail("timed out waiting for state " + want_state);
+      }
+      auto s = client.NextNotification(std::min(left, 5.0), &error);
+      if (!s) {
+        if (error.rfind("timed out", 0) == 0) continue;
+        return Fail(error);
+      }
+      if (*wait) {
+        if (s->value("state", "") == want_state) return 0;
+        continue;
+      }
+      std::printf(tty ? "\r\033[K%s" : "%s\n", StatusLine(*s).c_str());
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}

@@ -1,0 +1,204 @@
+#include "daemon/irslamd.h"
+
+#include <systemd/sd-daemon.h>
+
+#include <cstdio>
+
+#include "daemon/config.h"
+#include "proto/codec.h"
+
+namespace irslam {
+
+namespace {
+int64_t Ns(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
+}
+}  // namespace
+
+Daemon::Daemon(boost::asio::io_context& io, DaemonOptions options, control::CoreOptions core)
+    : io_(io),
+      options_(std::move(options)),
+      core_options_(core),
+      core_(std::make_unique<control::RobotCore>(core)),
+      timer_(io),
+      signals_(io, SIGINT, SIGTERM, SIGHUP),
+      start_(Clock::now()),
+      scheduler_(static_cast<int64_t>(core.period_s / options_.time_scale * 1e9), Ns(start_)) {}
+
+Daemon::~Daemon() = default;
+
+double Daemon::WallNow() const {
+  return std::chrono::duration<double>(Clock::now() - start_).count();
+}
+
+double Daemon::RobotNow() const { return WallNow() * options_.time_scale; }
+
+bool Daemon::Open(std::string* error) {
+  drivers::CanBusOptions bus_options;
+  bus_options.iface = options_.can_iface;
+  bus_options.rx_ids = {proto::kControllerStatusId, proto::kEncoderId, proto::kIrAId,
+                        proto::kIrBId};
+  bus_ = drivers::OpenCanBus(io_, bus_options, error);
+  if (!bus_) return false;
+  api_ = std::make_unique<ApiServer>(io_, options_.socket_path, options_.limits, this);
+  if (!api_->Listen(error)) return false;
+  bus_->Start([this](const can_frame& f, double) { core_->OnFrame(f, RobotNow()); });
+  return true;
+}
+
+void Daemon::Notify(const std::string& text) { sd_notify(0, text.c_str()); }
+
+int Daemon::Run() {
+  running_ = true;
+  signals_.async_wait([this](const boost::system::error_code& ec, int signo) {
+    if (!ec) OnSignal(signo);
+  });
+  if (sd_watchdog_enabled(0, &watchdog_usec_) <= 0) watchdog_usec_ = 0;
+  start_ = Clock::now();
+  scheduler_ = PeriodScheduler(scheduler_.period_ns(), Ns(start_));
+  ArmTimer();
+  std::fprintf(stderr, "<6>irslamd: ready can=%s socket=%s period=%.3fs time_scale=%g\n",
+               bus_->name().c_str(), options_.socket_path.c_str(), core_options_.period_s,
+               options_.time_scale);
+  Notify("READY=1\nSTATUS=state=idle");
+  io_.run();
+  return 0;
+}
+
+void Daemon::ArmTimer() {
+  timer_.expires_at(Clock::time_point(std::chrono::nanoseconds(scheduler_.deadline_ns())));
+  timer_.async_wait([this](const boost::system::error_code& ec) {
+    if (ec || !running_) return;
+    OnTick();
+    ArmTimer();
+  });
+}
+
+void Daemon::OnTick() {
+  const auto woke = Clock::now();
+  scheduler_.OnWake(Ns(woke));
+  const double now = RobotNow();
+  for (const can_frame& f : core_->Tick(now)) bus_->Send(f);
+  if (core_->state() != last_state_) {
+    last_state_ = core_->state();
+    std::fprintf(stderr, "<6>irslamd: state=%s reason=\"%s\"\n", control::ToString(last_state_),
+                 core_->Status(now)["reason"].get<std::string>().c_str());
+    Notify(std::string("STATUS=state=") + control::ToString(last_state_));
+  }
+  // The watchdog is fed from the loop itself, so a stalled loop is noticed.
+  const double wall = WallNow();
+  if (watchdog_usec_ > 0 && wall - last_watchdog_ >= static_cast<double>(watchdog_usec_) * 0.5e-6) {
+    last_watchdog_ = wall;
+    Notify("WATCHDOG=1");
+  }
+  max_work_s_ = std::max(max_work_s_, std::chrono::duration<double>(Clock::now() - woke).count());
+}
+
+void Daemon::OnSignal(int signo) {
+  if (signo == SIGHUP) {
+    Reload();
+    signals_.async_wait([this](const boost::system::error_code& ec, int s) {
+      if (!ec) OnSignal(s);
+    });
+    return;
+  }
+  std::fprintf(stderr, "<6>irslamd: signal %d: stopping the wheels and exiting\n", signo);
+  Shutdown();
+}
+
+void Daemon::Shutdown() {
+  Notify("STOPPING=1");
+  running_ = false;
+  core_->Stop(RobotNow());
+  if (bus_) bus_->Send(core_->StopFrame());
+  timer_.cancel();
+  signals_.cancel();
+  if (api_) api_->Close();
+  if (bus_) bus_->Close();
+  io_.stop();
+}
+
+void Daemon::Reload() {
+  if (options_.config_path.empty()) {
+    std::fprintf(stderr, "<5>irslamd: SIGHUP: no --config file, nothing to reload\n");
+    return;
+  }
+  control::CoreOptions fresh = control::DefaultCoreOptions();
+  std::string error;
+  if (!LoadConfigFile(options_.config_path, &fresh, &error)) {
+    std::fprintf(stderr, "<3>irslamd: reload failed, keeping the running config: %s\n",
+                 error.c_str());
+    return;
+  }
+  const auto s = core_->state();
+  if (s == control::MissionState::kIdle || s == control::MissionState::kDone) {
+    pending_options_.reset();
+    core_options_ = fresh;
+    auto next = std::make_unique<control::RobotCore>(fresh);
+    core_ = std::move(next);
+    scheduler_ = PeriodScheduler(static_cast<int64_t>(fresh.period_s / options_.time_scale * 1e9),
+                                 Ns(Clock::now()));
+    std::fprintf(stderr, "<5>irslamd: config reloaded from %s\n", options_.config_path.c_str());
+  } else {
+    pending_options_ = fresh;
+    std::fprintf(stderr, "<5>irslamd: config from %s validated; applied when the mission ends\n",
+                 options_.config_path.c_str());
+  }
+}
+
+nlohmann::json Daemon::StatusJson() {
+  const double now = RobotNow();
+  nlohmann::json s = core_->Status(now);
+  s["uptime"] = WallNow();
+  s["time_scale"] = options_.time_scale;
+  s["period"] = {{"target", core_options_.period_s},
+                 {"ticks", scheduler_.ticks()},
+                 {"overruns", scheduler_.overruns()},
+                 {"jitter_mean", scheduler_.mean_late_ns() * 1e-9},
+                 {"jitter_max", static_cast<double>(scheduler_.max_late_ns()) * 1e-9},
+                 {"jitter_last", static_cast<double>(scheduler_.last_late_ns()) * 1e-9},
+                 {"work_max", max_work_s_}};
+  const auto& c = bus_->stats();
+  s["can"] = {{"iface", bus_->name()},     {"rx", c.rx_frames},
+              {"tx", c.tx_frames},         {"rx_dropped", c.rx_dropped},
+              {"tx_dropped", c.tx_dropped}, {"filtered", c.filtered},
+              {"error_frames", c.error_frames}, {"bus_off", c.bus_off},
+              {"link_up", c.link_up},      {"link_down_events", c.link_down_events},
+              {"last_error", c.last_error}};
+  const auto& a = api_->stats();
+  s["api"] = {{"clients", api_->client_count()}, {"requests", a.requests}, {"errors", a.errors},
+              {"dropped_slow", a.dropped_slow}, {"dropped_long_line", a.dropped_long_line},
+              {"rejected_full", a.rejected_full}};
+  s["config_pending"] = pending_options_.has_value();
+  return s;
+}
+
+nlohmann::json Daemon::StatusNotification() { return StatusJson(); }
+
+bool Daemon::MaySubscribe(const PeerCred& /*peer*/) { return true; }
+
+nlohmann::json Daemon::Handle(const rpc::Request& req, const PeerCred& /*peer*/) {
+  const double now = RobotNow();
+  if (req.method == "status") return rpc::MakeResult(req.id, StatusJson());
+  if (req.method == "map") return rpc::MakeResult(req.id, core_->Map());
+  if (req.method == "start") {
+    const auto s = core_->state();
+    if (pending_options_ &&
+        (s == control::MissionState::kIdle || s == control::MissionState::kDone)) {
+      Reload();
+    }
+    std::string why;
+    if (!core_->Start(now, &why)) return rpc::MakeError(req.id, rpc::kRejected, "start rejected: " + why);
+    std::fprintf(stderr, "<6>irslamd: mission started\n");
+    return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
+  }
+  if (req.method == "stop") {
+    core_->Stop(now);
+    bus_->Send(core_->StopFrame());  // at once, not at the next period
+    std::fprintf(stderr, "<6>irslamd: stopped by request\n");
+    return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
+  }
+  return rpc::MakeError(req.id, rpc::kMethodNotFound, "method not found: " + req.method);
+}
+
+}  // namespace irslam

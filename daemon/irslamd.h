@@ -1,0 +1,76 @@
+// The daemon's thin shell: one io_context, the CAN bus, the fixed-period control
+// loop, the JSON-RPC API, signals and systemd notification around a RobotCore.
+#ifndef IRSLAM_DAEMON_IRSLAMD_H_
+#define IRSLAM_DAEMON_IRSLAMD_H_
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "control/robot_core.h"
+#include "daemon/api_server.h"
+#include "daemon/period_scheduler.h"
+#include "drivers/can_bus.h"
+
+namespace irslam {
+
+struct DaemonOptions {
+  std::string can_iface;
+  std::string socket_path = "/run/irslam/irslamd.sock";
+  std::string config_path;  // empty: built-in defaults
+  double time_scale = 1.0;
+  ApiLimits limits;
+};
+
+class Daemon : public ApiServer::Dispatcher {
+ public:
+  Daemon(boost::asio::io_context& io, DaemonOptions options, control::CoreOptions core);
+  ~Daemon() override;
+
+  // Opens the bus and the socket; false with a one-line *error.
+  bool Open(std::string* error);
+  // Runs until SIGTERM/SIGINT. Returns the process exit status.
+  int Run();
+
+  // ApiServer::Dispatcher
+  nlohmann::json Handle(const rpc::Request& request, const PeerCred& peer) override;
+  bool MaySubscribe(const PeerCred& peer) override;
+  nlohmann::json StatusNotification() override;
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  double RobotNow() const;
+  double WallNow() const;
+  void ArmTimer();
+  void OnTick();
+  void OnSignal(int signo);
+  void Reload();
+  void Shutdown();
+  nlohmann::json StatusJson();
+  void Notify(const std::string& text);
+
+  boost::asio::io_context& io_;
+  DaemonOptions options_;
+  control::CoreOptions core_options_;
+  std::optional<control::CoreOptions> pending_options_;
+  std::unique_ptr<control::RobotCore> core_;
+  std::unique_ptr<drivers::CanBus> bus_;
+  std::unique_ptr<ApiServer> api_;
+  boost::asio::steady_timer timer_;
+  boost::asio::signal_set signals_;
+  Clock::time_point start_;
+  PeriodScheduler scheduler_;
+  double max_work_s_ = 0;
+  uint64_t watchdog_usec_ = 0;
+  double last_watchdog_ = -1e9;
+  control::MissionState last_state_ = control::MissionState::kIdle;
+  bool running_ = false;
+};
+
+}  // namespace irslam
+
+#endif  // IRSLAM_DAEMON_IRSLAMD_H_

@@ -1,0 +1,51 @@
+// irslamd: the irslam navigation daemon (contracts.md §2).
+//   irslamd --can IFACE [--socket PATH] [--config FILE] [--time-scale K]
+#include <CLI/CLI.hpp>
+#include <boost/asio/io_context.hpp>
+#include <cstdio>
+
+#include "daemon/config.h"
+#include "daemon/irslamd.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"irslamd: line-feature SLAM and exploration for a robot with IR range sensors"};
+  irslam::DaemonOptions options;
+  bool print_config = false;
+  app.add_option("--can", options.can_iface, "CAN interface (can0, vcan0) or unix:PATH");
+  app.add_option("--socket", options.socket_path, "Control socket path")
+      ->capture_default_str();
+  app.add_option("--config", options.config_path, "Config file (JSON with comments)");
+  app.add_option("--time-scale", options.time_scale,
+                 "Robot time runs K times faster than wall time (tests, demos)")
+      ->check(CLI::Range(0.01, 1000.0))
+      ->capture_default_str();
+  app.add_option("--max-clients", options.limits.max_clients, "API client limit")
+      ->capture_default_str();
+  app.add_flag("--print-config", print_config, "Print the effective configuration and exit");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  irslam::control::CoreOptions core = irslam::control::DefaultCoreOptions();
+  std::string error;
+  if (!options.config_path.empty() && !irslam::LoadConfigFile(options.config_path, &core, &error)) {
+    std::fprintf(stderr, "irslamd: %s\n", error.c_str());
+    return 2;
+  }
+  if (print_config) {
+    std::printf("%s\n", irslam::DumpConfig(core).c_str());
+    return 0;
+  }
+  if (options.can_iface.empty()) {
+    std::fprintf(stderr, "irslamd: --can IFACE is required (can0, vcan0 or unix:PATH)\n");
+    return 2;
+  }
+  boost::asio::io_context io;
+  irslam::Daemon daemon(io, options, core);
+  if (!daemon.Open(&error)) {
+    std::fprintf(stderr, "irslamd: %s\n", error.c_str());
+    return 1;
+  }
+  return daemon.Run();
+}

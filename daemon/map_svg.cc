@@ -1,0 +1,152 @@
+#include "daemon/map_svg.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+namespace irslam {
+namespace {
+
+struct Xf {  // map frame -> drawing frame (world frame when truth is known)
+  double x = 0, y = 0, th = 0;
+  void Apply(double mx, double my, double* ox, double* oy) const {
+    *ox = x + std::cos(th) * mx - std::sin(th) * my;
+    *oy = y + std::sin(th) * mx + std::cos(th) * my;
+  }
+};
+
+class Canvas {
+ public:
+  void Extend(double x, double y) {
+    xmin_ = std::min(xmin_, x);
+    xmax_ = std::max(xmax_, x);
+    ymin_ = std::min(ymin_, y);
+    ymax_ = std::max(ymax_, y);
+  }
+  void Line(double x0, double y0, double x1, double y1, const char* color, double width,
+            const char* extra = "") {
+    Extend(x0, y0);
+    Extend(x1, y1);
+    body_ << "<line x1='" << x0 << "' y1='" << -y0 << "' x2='" << x1 << "' y2='" << -y1
+          << "' stroke='" << color << "' stroke-width='" << width << "' " << extra << "/>\n";
+  }
+  void Poly(const std::vector<std::pair<double, double>>& pts, const char* color, double width,
+            const char* fill = "none", bool closed = false) {
+    if (pts.empty()) return;
+    body_ << "<" << (closed ? "polygon" : "polyline") << " fill='" << fill << "' stroke='" << color
+          << "' stroke-width='" << width << "' points='";
+    for (const auto& [x, y] : pts) {
+      Extend(x, y);
+      body_ << x << "," << -y << " ";
+    }
+    body_ << "'/>\n";
+  }
+  void Raw(const std::string& s) { body_ << s; }
+  std::string Finish(const std::string& legend) {
+    if (xmin_ > xmax_) xmin_ = ymin_ = 0, xmax_ = ymax_ = 1;
+    const double m = 0.3;
+    std::ostringstream os;
+    const double w = xmax_ - xmin_ + 2 * m, h = ymax_ - ymin_ + 2 * m;
+    os << "<svg xmlns='http://www.w3.org/2000/svg' width='" << std::round(w * 150) << "' height='"
+       << std::round(h * 150 + 40) << "' viewBox='" << xmin_ - m << " " << -ymax_ - m << " " << w
+       << " " << h + 0.27 << "'>\n"
+       << "<rect x='" << xmin_ - m << "' y='" << -ymax_ - m << "' width='" << w << "' height='"
+       << h + 0.27 << "' fill='white'/>\n"
+       << body_.str() << "<text x='" << xmin_ - m + 0.05 << "' y='" << -ymin_ + m + 0.15
+       << "' font-size='0.11' font-family='sans-serif'>" << legend << "</text>\n</svg>\n";
+    return os.str();
+  }
+
+ private:
+  double xmin_ = 1e9, xmax_ = -1e9, ymin_ = 1e9, ymax_ = -1e9;
+  std::ostringstream body_;
+};
+
+}  // namespace
+
+std::string RenderMapSvg(const nlohmann::json& map, const nlohmann::json& truth,
+                         const nlohmann::json& world) {
+  Canvas c;
+  Xf xf;
+  const bool have_truth = truth.is_object() && truth.contains("trajectory") &&
+                          !truth["trajectory"].empty();
+  if (have_truth) {
+    // The map frame starts at the robot's start pose (odometry origin).
+    const auto& p = truth["trajectory"][0];
+    xf = {p[1].get<double>(), p[2].get<double>(), p[3].get<double>()};
+  }
+  if (world.is_object()) {
+    std::vector<std::pair<double, double>> outline;
+    if (world.contains("outline")) {
+      for (const auto& p : world["outline"]) outline.emplace_back(p[0], p[1]);
+    } else if (world.contains("room")) {
+      const double w = world["room"][0], h = world["room"][1];
+      outline = {{0, 0}, {w, 0}, {w, h}, {0, h}};
+    }
+    c.Poly(outline, "#999", 0.03, "#f4f4f4", true);
+    for (const auto& b : world.value("objects", nlohmann::json::array())) {
+      const double x0 = b[0], y0 = b[1], x1 = b[2], y1 = b[3];
+      c.Poly({{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}, "#999", 0.02, "#ddd", true);
+    }
+  }
+  const auto draw_traj = [&](const nlohmann::json& t, const char* color, double width, bool map_frame) {
+    std::vector<std::pair<double, double>> pts;
+    for (const auto& p : t) {
+      double x = p[1], y = p[2];
+      if (map_frame) xf.Apply(p[1].get<double>(), p[2].get<double>(), &x, &y);
+      pts.emplace_back(x, y);
+    }
+    c.Poly(pts, color, width);
+  };
+  if (have_truth) {
+    draw_traj(truth.value("odometry", nlohmann::json::array()), "#2a2", 0.012, false);
+    draw_traj(truth["trajectory"], "#d22", 0.012, false);
+  }
+  if (map.is_object()) {
+    draw_traj(map.value("trajectory", nlohmann::json::array()), "#36c", 0.015, true);
+    for (const auto& l : map.value("lines", nlohmann::json::array())) {
+      double x0, y0, x1, y1;
+      xf.Apply(l["p0"][0].get<double>(), l["p0"][1].get<double>(), &x0, &y0);
+      xf.Apply(l["p1"][0].get<double>(), l["p1"][1].get<double>(), &x1, &y1);
+      c.Line(x0, y0, x1, y1, "#000", 0.03, "stroke-linecap='round'");
+      // Uncertainty of the line: an ellipse at its centre, sigma of rho across the
+      // line and sigma of theta times half-length along it (x3 for visibility).
+      const double srr = std::sqrt(std::max(0.0, l["cov"][0][0].get<double>()));
+      const double stt = std::sqrt(std::max(0.0, l["cov"][1][1].get<double>()));
+      const double len = l.value("length", 0.0);
+      const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+      const double ang = std::atan2(y1 - y0, x1 - x0) * 180 / M_PI;
+      std::ostringstream e;
+      e << "<ellipse cx='" << cx << "' cy='" << -cy << "' rx='" << std::max(0.01, 3 * stt * len / 2)
+        << "' ry='" << std::max(0.005, 3 * srr) << "' transform='rotate(" << -ang << " " << cx
+        << " " << -cy << ")' fill='none' stroke='#c0c' stroke-width='0.008'/>\n";
+      c.Raw(e.str());
+      std::ostringstream t;
+      t << "<text x='" << cx << "' y='" << -cy << "' font-size='0.09' fill='#000'>" << l["id"]
+        << "</text>\n";
+      c.Raw(t.str());
+    }
+    for (const auto& o : map.value("objects", nlohmann::json::array())) {
+      if (!o.contains("box") || !o["box"].is_array()) continue;
+      const auto& b = o["box"];
+      std::vector<std::pair<double, double>> pts;
+      const double bx[4][2] = {{b[0], b[1]}, {b[2], b[1]}, {b[2], b[3]}, {b[0], b[3]}};
+      for (const auto& q : bx) {
+        double x, y;
+        xf.Apply(q[0], q[1], &x, &y);
+        pts.emplace_back(x, y);
+      }
+      const bool complete = o.value("complete", false);
+      const bool wall = o.value("kind", "") == "wall_contact";
+      c.Poly(pts, wall ? "#e80" : "#08a", 0.02,
+             complete ? (wall ? "rgba(238,136,0,0.2)" : "rgba(0,136,170,0.2)") : "none", true);
+    }
+  }
+  std::string legend = "black: mapped lines (magenta: 3-sigma), blue: SLAM trajectory";
+  if (have_truth) legend += ", red: true trajectory, green: odometry";
+  if (map.is_object()) legend += " | state: " + map.value("state", std::string("?"));
+  return c.Finish(legend);
+}
+
+}  // namespace irslam
