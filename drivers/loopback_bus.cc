@@ -1,8 +1,11 @@
 // Loopback CAN bus over Unix datagram sockets (see can_bus.h).
 //
-// PATH is a directory; each node binds one SOCK_DGRAM socket "node-<pid>-<n>" in it.
+// PATH is a directory; each node binds one SOCK_DGRAM socket "node-<pid>-<fd>" in it.
 // Sending a frame sends the 16-byte struct can_frame to every other socket in the
-// directory. The peer list is re-read whenever the directory changed (its mtime,
+// directory. Frames sent in one turn of the event loop travel together in one
+// datagram (a whole number of can_frames, at most kMaxBatch): the kernel limits a
+// datagram socket's queue to net.unix.max_dgram_qlen datagrams (10 by default),
+// which one frame per datagram would overflow in any burst. The peer list is re-read whenever the directory changed (its mtime,
 // compared conservatively because the kernel stamps it with a coarse clock), so a
 // node that joined is reached by the very next frame. A peer that died leaves a
 // socket file nobody listens on: sendto() says ECONNREFUSED and we unlink it.
@@ -15,9 +18,12 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <ctime>
+
+#include <boost/asio/post.hpp>
 
 namespace irslam::drivers {
 namespace {
@@ -100,26 +106,29 @@ bool LoopbackBus::Wanted(uint32_t id) const {
 }
 
 void LoopbackBus::Drain() {
-  for (int i = 0; i < 256; ++i) {
-    can_frame f;
-    const ssize_t n = ::recv(descriptor_.native_handle(), &f, sizeof f, MSG_DONTWAIT);
+  for (int i = 0; i < 64 && open_; ++i) {
+    can_frame batch[kMaxBatch + 1];
+    const ssize_t n = ::recv(descriptor_.native_handle(), batch, sizeof batch, MSG_DONTWAIT);
     if (n < 0) {
       if (errno == EINTR) continue;
       return;  // EAGAIN: drained
     }
-    if (n != static_cast<ssize_t>(sizeof f)) {
-      ++stats_.rx_dropped;  // not a CAN_MTU datagram: not a frame
+    if (n == 0 || n % static_cast<ssize_t>(sizeof(can_frame)) != 0 ||
+        n > static_cast<ssize_t>(kMaxBatch * sizeof(can_frame))) {
+      ++stats_.rx_dropped;  // not a whole number of CAN_MTU frames: not ours
       continue;
     }
-    if (!Wanted(f.can_id)) {
-      ++stats_.filtered;
-      continue;
-    }
-    ++stats_.rx_frames;
-    if (handler_) {
-      timespec ts;
-      ::clock_gettime(CLOCK_REALTIME, &ts);
-      handler_(f, static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec));
+    timespec ts;
+    ::clock_gettime(CLOCK_REALTIME, &ts);
+    const double now = static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+    const size_t count = static_cast<size_t>(n) / sizeof(can_frame);
+    for (size_t k = 0; k < count && open_; ++k) {
+      if (!Wanted(batch[k].can_id)) {
+        ++stats_.filtered;
+        continue;
+      }
+      ++stats_.rx_frames;
+      if (handler_) handler_(batch[k], now);
     }
   }
 }
@@ -152,6 +161,30 @@ bool LoopbackBus::Send(const can_frame& frame) {
     ++stats_.tx_dropped;
     return false;
   }
+  pending_.push_back(frame);
+  if (!flush_posted_) {
+    flush_posted_ = true;
+    boost::asio::post(descriptor_.get_executor(), [this, alive = alive_] {
+      if (*alive) Flush();
+    });
+  }
+  return true;
+}
+
+void LoopbackBus::Flush() {
+  flush_posted_ = false;
+  for (size_t off = 0; off < pending_.size(); off += kMaxBatch) {
+    const size_t count = std::min(kMaxBatch, pending_.size() - off);
+    SendBatch(pending_.data() + off, count);
+  }
+  pending_.clear();
+}
+
+void LoopbackBus::SendBatch(const can_frame* frames, size_t count) {
+  if (!open_) {
+    stats_.tx_dropped += count;
+    return;
+  }
   RefreshPeers();
   bool all_ok = true;
   for (size_t i = 0; i < peers_.size();) {
@@ -161,7 +194,7 @@ bool LoopbackBus::Send(const can_frame& frame) {
       ++i;
       continue;
     }
-    const ssize_t n = ::sendto(descriptor_.native_handle(), &frame, sizeof frame,
+    const ssize_t n = ::sendto(descriptor_.native_handle(), frames, count * sizeof(can_frame),
                                MSG_DONTWAIT | MSG_NOSIGNAL,
                                reinterpret_cast<sockaddr*>(&addr), len);
     if (n < 0 && (errno == ECONNREFUSED || errno == ENOENT)) {
@@ -178,16 +211,17 @@ bool LoopbackBus::Send(const can_frame& frame) {
     ++i;
   }
   if (all_ok) {
-    ++stats_.tx_frames;
+    stats_.tx_frames += count;
   } else {
-    ++stats_.tx_dropped;
+    stats_.tx_dropped += count;
   }
-  return all_ok;
 }
 
 void LoopbackBus::Close() {
   if (!open_) return;
+  Flush();  // frames sent just before closing (the stop command) still go out
   open_ = false;
+  *alive_ = false;
   boost::system::error_code ec;
   descriptor_.cancel(ec);
   descriptor_.close(ec);

@@ -2,6 +2,7 @@
 #define IRSLAM_DRIVERS_INTERNAL_LOOPBACK_BUS_H_
 
 #include <boost/asio/posix/stream_descriptor.hpp>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -22,8 +23,12 @@ class LoopbackBus final : public CanBus {
   std::string name() const override { return "unix:" + dir_; }
 
  private:
+  static constexpr size_t kMaxBatch = 64;
+
   void WaitRead();
   void Drain();
+  void Flush();
+  void SendBatch(const can_frame* frames, size_t count);
   void RefreshPeers();
   bool Wanted(uint32_t id) const;
 
@@ -38,6 +43,9 @@ class LoopbackBus final : public CanBus {
   double peers_mtime_ = 0;
   bool peers_valid_ = false;
   bool open_ = false;
+  std::vector<can_frame> pending_;
+  bool flush_posted_ = false;
+  std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);
 };
 
 class SocketCanBus final : public CanBus {

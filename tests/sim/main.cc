@@ -18,19 +18,12 @@
 #include "proto/codec.h"
 #include "proto/json_text.h"
 #include "tests/sim/sim_controller.h"
+#include "tests/sim/sim_run.h"
 
 namespace irslam::sim {
 namespace {
 
 constexpr int kExitUsage = 2;
-
-SimOptions SimOptionsFrom(const control::CoreOptions& core) {
-  SimOptions o;
-  o.geometry = core.slam.geometry;
-  o.mounts = core.slam.mounts;
-  o.ir = core.ir;
-  return o;
-}
 
 bool WriteJson(const std::string& path, const nlohmann::json& j) {
   if (path.empty()) return true;
@@ -80,37 +73,14 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
   control::CoreOptions core_opts;
   uint64_t seed;
   if (!Load(c, &world, &core_opts, &seed)) return kExitUsage;
-  SimController sim(world, SimOptionsFrom(core_opts), seed);
-  control::RobotCore core(core_opts);
-
-  // Same frames, same core as the daemon; only the bus and the clock are in-process.
-  const double io_dt = 0.002;
-  const double period = core_opts.period_s;
-  double next_tick = period;
-  bool started = false;
-  std::vector<can_frame> frames;
-  double t = 0;
-  for (; t < max_time; t += io_dt) {
-    frames.clear();
-    sim.AdvanceTo(t + io_dt, &frames);
-    for (const can_frame& f : frames) core.OnFrame(f, t + io_dt);
-    if (t + io_dt >= next_tick - 1e-9) {
-      next_tick += period;
-      if (!started && t > 0.3) {
-        std::string why;
-        if (!core.Start(t + io_dt, &why)) {
-          std::fprintf(stderr, "irslam-sim: cannot start the mission: %s\n", why.c_str());
-          return 1;
-        }
-        started = true;
-      }
-      for (const can_frame& f : core.Tick(t + io_dt)) sim.HandleFrame(f);
-      if (started && (core.state() == control::MissionState::kDone ||
-                      core.state() == control::MissionState::kIdle)) {
-        break;
-      }
-    }
+  InProcessRun run = RunInProcess(world, core_opts, seed, max_time);
+  if (!run.error.empty()) {
+    std::fprintf(stderr, "irslam-sim: cannot start the mission: %s\n", run.error.c_str());
+    return 1;
   }
+  const SimController& sim = *run.sim;
+  const control::RobotCore& core = *run.core;
+  const double t = run.t;
   if (!WriteJson(map_out, core.Map())) {
     std::fprintf(stderr, "irslam-sim: cannot write %s\n", map_out.c_str());
     return 1;

@@ -14,7 +14,9 @@ SimController::SimController(World world, SimOptions options, uint64_t seed)
       segments_(world_.Segments()),
       rng_(seed),
       pose_(world_.start),
-      odom_pose_(world_.start) {}
+      odom_pose_(world_.start),
+      next_encoder_(options_.encoder_period_s),
+      next_status_(options_.status_period_s) {}
 
 void SimController::HandleFrame(const can_frame& frame) {
   const proto::DecodeResult r = proto::Decode(frame);
@@ -25,6 +27,7 @@ void SimController::HandleFrame(const can_frame& frame) {
     target_l_ = c->enable ? std::clamp(c->left_mps, -vmax, vmax) : 0.0;
     target_r_ = c->enable ? std::clamp(c->right_mps, -vmax, vmax) : 0.0;
     last_cmd_t_ = t_;
+    ever_commanded_ = true;
   }
 }
 
@@ -75,13 +78,16 @@ void SimController::PhysicsStep(double dt) {
   const double radius = options_.geometry.radius_m;
   if (after < radius && after < before) {
     // Blocked: the robot does not move and the motors stall (no encoder counts).
-    if (!in_contact_) ++collisions_;
+    // One collision per contact: touching again before backing off 1 cm is the same one.
+    if (!blocked_) ++collisions_;
+    blocked_ = true;
     in_contact_ = true;
     Clearance(pose_, &bump);
     bumpers_ = bump ? bump : static_cast<uint8_t>(proto::kBumperLeft | proto::kBumperRight);
     vl_ = vr_ = 0;
     return;
   }
+  if (after > radius + 0.01) blocked_ = false;
   in_contact_ = after < radius + 0.003;
   bumpers_ = in_contact_ ? bump : 0;
   pose_ = next;
@@ -152,7 +158,7 @@ void SimController::AdvanceTo(double t, std::vector<can_frame>* out) {
       proto::ControllerStatus s;
       s.state = (enabled_ && !timed_out) ? proto::ControllerState::kDriving
                                          : proto::ControllerState::kReady;
-      s.faults = timed_out && last_cmd_t_ > 0 ? proto::kFaultCommandTimeout : 0;
+      s.faults = timed_out && ever_commanded_ ? proto::kFaultCommandTimeout : 0;
       s.bumpers = bumpers_;
       s.battery_v = 14.4;
       s.timestamp_ms = stamp;

@@ -76,9 +76,11 @@ class SimController {
   int64_t odom_counts_l_ = 0, odom_counts_r_ = 0;
   uint8_t bumpers_ = 0;
   bool in_contact_ = false;
+  bool blocked_ = false;
+  bool ever_commanded_ = false;
   uint64_t collisions_ = 0;
   double min_clearance_ = 1e9;
-  double next_encoder_ = 0, next_status_ = 0, next_ir_ = 0, next_truth_ = 0;
+  double next_encoder_, next_status_, next_ir_ = 0, next_truth_ = 0;
   uint8_t seq_enc_ = 0, seq_status_ = 0, seq_ir_ = 0;
   std::vector<std::array<double, 4>> truth_, odom_;
 };

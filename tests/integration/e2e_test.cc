@@ -1,0 +1,370 @@
+// Integration tests with the real processes: irslam-sim serve + irslamd + irslamctl
+// over the loopback bus (vcan0 when IRSLAM_TEST_CAN=vcan0), time-scaled.
+#include <signal.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "daemon/rpc_client.h"
+#include "proto/codec.h"
+#include "proto/json_text.h"
+#include "tests/testing/bus_tap.h"
+#include "tests/testing/process.h"
+
+namespace irslam {
+namespace {
+
+using testing::Process;
+using testing::RunCommand;
+using Clock = std::chrono::steady_clock;
+
+const std::string kBin = IRSLAM_BINARY_DIR;
+const std::string kSrc = IRSLAM_SOURCE_DIR;
+const std::string kSim = kBin + "/tests/sim/irslam-sim";
+const std::string kDaemon = kBin + "/daemon/irslamd";
+const std::string kCtl = kBin + "/daemon/irslamctl";
+constexpr double kScale = 10;
+
+void Sleep(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
+
+class E2eTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = testing::MakeTempDir();
+    const char* env = std::getenv("IRSLAM_TEST_CAN");
+    bus_ = env && *env ? env : "unix:" + dir_ + "/bus";
+    socket_ = dir_ + "/irslamd.sock";
+  }
+  void TearDown() override {
+    if (HasFailure()) {
+      std::fprintf(stderr, "--- sim log\n%s--- daemon log\n%s", testing::ReadFile(dir_ + "/sim.log").c_str(),
+                   testing::ReadFile(dir_ + "/daemon.log").c_str());
+    }
+    daemon_.Signal(SIGKILL);
+    sim_.Signal(SIGKILL);
+    daemon_.Wait(5);
+    sim_.Wait(5);
+    std::filesystem::remove_all(dir_);
+  }
+
+  void StartAll(const std::string& world = "wall_follow_fig14.json") {
+    ASSERT_TRUE(sim_.Start({kSim, "serve", "--can", bus_, "--world", kSrc + "/tests/worlds/" + world,
+                            "--time-scale", std::to_string(kScale), "--truth-out", dir_ + "/truth.json"},
+                           dir_ + "/sim.log"));
+    ASSERT_TRUE(daemon_.Start({kDaemon, "--can", bus_, "--socket", socket_, "--time-scale",
+                               std::to_string(kScale), "--config", kSrc + "/daemon/irslamd.conf"},
+                              dir_ + "/daemon.log"));
+    // Ready when the daemon answers and hears the controller.
+    for (int i = 0; i < 100; ++i) {
+      auto s = Status();
+      if (s && (*s)["controller"]["alive"] == true) return;
+      Sleep(0.05);
+    }
+    FAIL() << "daemon never saw the controller";
+  }
+
+  std::optional<nlohmann::json> Status() {
+    RpcClient c;
+    std::string error;
+    if (!c.Connect(socket_, &error)) return std::nullopt;
+    return c.Call("status", nlohmann::json::object(), 5, &error);
+  }
+
+  int Ctl(const std::vector<std::string>& args, std::string* out = nullptr) {
+    std::vector<std::string> argv = {kCtl, "--socket", socket_};
+    argv.insert(argv.end(), args.begin(), args.end());
+    std::string o;
+    const int rc = RunCommand(argv, &o);
+    if (out) *out = o;
+    return rc;
+  }
+
+  // Waits (wall time) until the daemon's robot time passes t.
+  nlohmann::json WaitRobotTime(double t, double wall_limit_s = 60) {
+    const auto end = Clock::now() + std::chrono::duration<double>(wall_limit_s);
+    nlohmann::json last;
+    while (Clock::now() < end) {
+      auto s = Status();
+      if (s) {
+        last = *s;
+        if ((*s)["robot_time"].get<double>() >= t) return *s;
+      }
+      Sleep(0.1);
+    }
+    ADD_FAILURE() << "robot time never reached " << t;
+    return last;
+  }
+
+  nlohmann::json StopSimAndReadTruth() {
+    sim_.Signal(SIGTERM);
+    EXPECT_EQ(sim_.Wait(10), 0);
+    std::string error;
+    auto j = ParseJsonText(testing::ReadFile(dir_ + "/truth.json"), &error);
+    EXPECT_TRUE(j) << error;
+    return j.value_or(nlohmann::json::object());
+  }
+
+  std::string dir_, bus_, socket_;
+  Process sim_, daemon_;
+};
+
+TEST_F(E2eTest, FollowsTheWholePerimeterOverTheBusAndReturnsToItsStart) {
+  StartAll();
+  std::string out;
+  ASSERT_EQ(Ctl({"start"}, &out), 0) << out;
+  EXPECT_EQ(out, "state: wall_follow\n");
+  // Poll status: it advances, and tells when wall following proper began.
+  double follow_t = -1, last_t = -1, last_dist = -1;
+  uint64_t last_enc = 0;
+  int advances = 0;
+  const auto end = Clock::now() + std::chrono::seconds(40);
+  while (Clock::now() < end) {
+    auto s = Status();
+    ASSERT_TRUE(s);
+    const double t = (*s)["robot_time"];
+    if (follow_t < 0 && (*s)["behaviour"] == "follow") follow_t = t;
+    if (t > last_t && (*s)["distance"].get<double>() > last_dist &&
+        (*s)["frames"]["encoder"].get<uint64_t>() > last_enc) {
+      ++advances;
+    }
+    last_t = t;
+    last_dist = (*s)["distance"];
+    last_enc = (*s)["frames"]["encoder"];
+    EXPECT_EQ((*s)["state"], "wall_follow") << s->dump();
+    if (t > 140) break;
+    Sleep(0.25);
+  }
+  EXPECT_GT(last_t, 140);
+  EXPECT_GT(advances, 30);
+  ASSERT_GT(follow_t, 0);
+  ASSERT_EQ(Ctl({"stop"}), 0);
+  const nlohmann::json truth = StopSimAndReadTruth();
+  EXPECT_EQ(truth["collisions"], 0);
+  EXPECT_GT(truth["min_clearance"].get<double>(), 0.19);
+  // Coverage of the four walls, and the return to where following began.
+  const auto& tr = truth["trajectory"];
+  double sx = 0, sy = 0;
+  // The reference point: 5 s into steady wall following.
+  follow_t += 5;
+  for (const auto& p : tr) {
+    if (p[0].get<double>() >= follow_t) {
+      sx = p[1];
+      sy = p[2];
+      break;
+    }
+  }
+  bool bottom = false, right = false, top = false, left = false;
+  double best = 1e9, path = 0, px = sx, py = sy;
+  for (const auto& p : tr) {
+    if (p[0].get<double>() < follow_t) continue;
+    const double x = p[1], y = p[2];
+    path += std::hypot(x - px, y - py);
+    px = x;
+    py = y;
+    bottom |= y < 0.6;
+    top |= y > 4.9;
+    left |= x < 0.6;
+    right |= x > 3.4;
+    if (bottom && top && left && right && path > 8) best = std::min(best, std::hypot(x - sx, y - sy));
+  }
+  EXPECT_TRUE(bottom && right && top && left);
+  EXPECT_LT(best, 0.10) << "did not return to the point where wall following began";
+}
+
+TEST_F(E2eTest, StopHaltsTheWheelsWithinOnePeriod) {
+  StartAll();
+  testing::BusTap tap(bus_);
+  ASSERT_TRUE(tap.ok()) << tap.error();
+  ASSERT_EQ(Ctl({"start"}), 0);
+  WaitRobotTime(Status().value()["robot_time"].get<double>() + 5);
+  RpcClient c;
+  std::string error;
+  ASSERT_TRUE(c.Connect(socket_, &error));
+  tap.Clear();
+  ASSERT_TRUE(c.Call("stop", nlohmann::json::object(), 5, &error)) << error;
+  const auto replied = Clock::now();
+  Sleep(0.3);
+  const double period_wall = 0.02 / kScale;
+  bool saw_zero_in_time = false;
+  int enabled_after = 0, status_ready = 0;
+  for (const auto& s : tap.Frames()) {
+    const auto d = proto::Decode(s.frame);
+    if (!d.ok()) continue;
+    if (const auto* cmd = std::get_if<proto::WheelCommand>(&d.message)) {
+      if (!cmd->enable && cmd->left_mps == 0 && cmd->right_mps == 0 &&
+          s.at <= replied + std::chrono::duration<double>(period_wall)) {
+        saw_zero_in_time = true;
+      }
+      if (cmd->enable && s.at > replied) ++enabled_after;
+    }
+    if (const auto* st = std::get_if<proto::ControllerStatus>(&d.message)) {
+      status_ready += st->state == proto::ControllerState::kReady && s.at > replied;
+    }
+  }
+  EXPECT_TRUE(saw_zero_in_time);
+  EXPECT_EQ(enabled_after, 0);
+  EXPECT_GT(status_ready, 0) << "the controller never reported the wheels stopped";
+  auto s = Status();
+  EXPECT_EQ((*s)["state"], "idle");
+  EXPECT_EQ((*s)["command"][0], 0.0);
+}
+
+TEST_F(E2eTest, BadFramesAreCountedAndDroppedWhileTheRobotKeepsGoing) {
+  StartAll();
+  testing::BusTap tap(bus_);
+  ASSERT_TRUE(tap.ok()) << tap.error();
+  ASSERT_EQ(Ctl({"start"}), 0);
+  WaitRobotTime(3);
+  const auto before = Status().value();
+  can_frame f{};
+  for (int i = 0; i < 50; ++i) {  // unknown ids
+    f.can_id = 0x555;
+    f.can_dlc = 8;
+    tap.Send(f);
+  }
+  for (int i = 0; i < 10; ++i) {  // extended id that aliases ours
+    f.can_id = proto::kEncoderId | CAN_EFF_FLAG;
+    tap.Send(f);
+  }
+  for (int i = 0; i < 20; ++i) {  // our id, wrong DLC
+    f = proto::Encode(proto::EncoderCounts{});
+    f.can_dlc = 3;
+    tap.Send(f);
+  }
+  Sleep(0.5);
+  const auto after = WaitRobotTime(before["robot_time"].get<double>() + 3);
+  EXPECT_EQ(after["can"]["filtered"].get<uint64_t>() - before["can"]["filtered"].get<uint64_t>(), 60u);
+  EXPECT_EQ(after["frames"]["wrong_dlc"].get<uint64_t>() - before["frames"]["wrong_dlc"].get<uint64_t>(), 20u);
+  EXPECT_EQ(after["state"], "wall_follow");
+  EXPECT_GT(after["frames"]["encoder"].get<uint64_t>(), before["frames"]["encoder"].get<uint64_t>() + 200);
+  EXPECT_GT(after["distance"].get<double>(), before["distance"].get<double>() + 0.3);
+}
+
+TEST_F(E2eTest, BadApiInputNeverWedgesTheDaemon) {
+  StartAll();
+  RpcClient good;
+  std::string error;
+  ASSERT_TRUE(good.Connect(socket_, &error));
+  {
+    RpcClient garbage;
+    ASSERT_TRUE(garbage.Connect(socket_, &error));
+    ASSERT_TRUE(garbage.SendRaw("\x01\x02 not json at all\n", &error));
+    auto l = garbage.ReadLine(5, &error);
+    ASSERT_TRUE(l) << error;
+    EXPECT_EQ(nlohmann::json::parse(*l)["error"]["code"], -32700);
+  }
+  {
+    RpcClient big;
+    ASSERT_TRUE(big.Connect(socket_, &error));
+    big.SendRaw(std::string(100 * 1024, '{'), &error);
+    auto l = big.ReadLine(5, &error);
+    ASSERT_TRUE(l) << error;
+    EXPECT_EQ(nlohmann::json::parse(*l)["error"]["code"], -32600);
+    EXPECT_FALSE(big.ReadLine(5, &error));
+  }
+  {
+    RpcClient half;
+    ASSERT_TRUE(half.Connect(socket_, &error));
+    half.SendRaw(R"({"jsonrpc":"2.0","id":1,"method":"sta)", &error);
+  }
+  {
+    RpcClient unknown;
+    ASSERT_TRUE(unknown.Connect(socket_, &error));
+    EXPECT_FALSE(unknown.Call("self_destruct", nlohmann::json::object(), 5, &error));
+    EXPECT_EQ(error, "method not found: self_destruct");
+  }
+  auto s = good.Call("status", nlohmann::json::object(), 5, &error);
+  ASSERT_TRUE(s) << error;
+  EXPECT_GE((*s)["api"]["dropped_long_line"].get<int>(), 1);
+  EXPECT_TRUE(daemon_.running());
+}
+
+TEST_F(E2eTest, SigtermStopsTheWheelsAndExitsCleanly) {
+  StartAll();
+  testing::BusTap tap(bus_);
+  ASSERT_EQ(Ctl({"start"}), 0);
+  WaitRobotTime(Status().value()["robot_time"].get<double>() + 2);
+  daemon_.Signal(SIGTERM);
+  EXPECT_EQ(daemon_.Wait(5), 0);
+  Sleep(0.1);
+  std::optional<proto::WheelCommand> last;
+  for (const auto& s : tap.Frames()) {
+    const auto d = proto::Decode(s.frame);
+    if (d.ok() && std::holds_alternative<proto::WheelCommand>(d.message)) {
+      last = std::get<proto::WheelCommand>(d.message);
+    }
+  }
+  ASSERT_TRUE(last);
+  EXPECT_FALSE(last->enable);
+  EXPECT_FALSE(std::filesystem::exists(socket_));
+  std::string out;
+  EXPECT_NE(Ctl({"status"}, &out), 0);
+  EXPECT_NE(out.find("cannot reach irslamd"), std::string::npos) << out;
+}
+
+TEST_F(E2eTest, CtlWaitAndMapWork) {
+  StartAll();
+  std::string out;
+  EXPECT_EQ(Ctl({"wait", "--state", "idle", "--timeout", "5"}, &out), 0) << out;
+  EXPECT_EQ(Ctl({"wait", "--state", "done", "--timeout", "0.5"}, &out), 1);
+  EXPECT_EQ(out, "irslamctl: timed out waiting for state done\n");
+  ASSERT_EQ(Ctl({"map", "--out", dir_ + "/map.json", "--svg", dir_ + "/map.svg"}, &out), 0) << out;
+  std::string error;
+  auto m = ParseJsonText(testing::ReadFile(dir_ + "/map.json"), &error);
+  ASSERT_TRUE(m) << error;
+  EXPECT_EQ((*m)["frame"], "map");
+  EXPECT_EQ((*m)["pose"].size(), 3u);
+  EXPECT_EQ((*m)["pose_cov"].size(), 3u);
+  EXPECT_NE(testing::ReadFile(dir_ + "/map.svg").find("<svg"), std::string::npos);
+  EXPECT_EQ(Ctl({"status", "--json"}, &out), 0);
+  EXPECT_EQ(nlohmann::json::parse(out)["state"], "idle");
+}
+
+TEST(CommandLineTest, BadConfigAndWorldFilesGiveOneLineAndStatus2) {
+  const std::string dir = testing::MakeTempDir();
+  {
+    std::ofstream(dir + "/bad.conf") << R"({"wall_follow": {"speed": 1}})";
+    std::ofstream(dir + "/broken.conf") << R"({"control": )";
+    std::ofstream(dir + "/bad_world.json") << R"({"room": [4, 4], "start": [1, 1]})";
+  }
+  const struct {
+    std::vector<std::string> argv;
+    std::string want;
+  } cases[] = {
+      {{kDaemon, "--can", "unix:" + dir + "/bus", "--config", dir + "/bad.conf"},
+       "irslamd: " + dir + "/bad.conf: config: wall_follow.speed is not a known key\n"},
+      {{kDaemon, "--can", "unix:" + dir + "/bus", "--config", dir + "/broken.conf"},
+       "irslamd: " + dir + "/broken.conf: config: not valid JSON"},
+      {{kDaemon, "--can", "unix:" + dir + "/bus", "--config", dir + "/missing.conf"},
+       "irslamd: config: cannot read " + dir + "/missing.conf\n"},
+      {{kSim, "run", "--world", dir + "/bad_world.json"},
+       "irslam-sim: " + dir + "/bad_world.json: world: \"start\" must be [x, y, theta]\n"},
+      {{kSim, "run", "--world", dir + "/missing.json"},
+       "irslam-sim: world: cannot read " + dir + "/missing.json\n"},
+  };
+  for (const auto& c : cases) {
+    std::string out;
+    EXPECT_EQ(RunCommand(c.argv, &out), 2) << c.argv.back();
+    EXPECT_EQ(out.rfind(c.want, 0), 0u) << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(CommandLineTest, UnusableCanInterfaceIsExplained) {
+  std::string out;
+  const std::string dir = testing::MakeTempDir();
+  EXPECT_EQ(RunCommand({kDaemon, "--can", "nocan7", "--socket", dir + "/s.sock"}, &out), 1);
+  EXPECT_TRUE(out.find("no CAN support") != std::string::npos ||
+              out.find("no such interface 'nocan7'") != std::string::npos)
+      << out;
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace irslam

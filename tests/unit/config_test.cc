@@ -1,0 +1,73 @@
+#include <gtest/gtest.h>
+
+#include "daemon/config.h"
+#include "tests/testing/process.h"
+
+namespace irslam {
+namespace {
+
+TEST(ConfigTest, ShippedFileEqualsTheBuiltInDefaults) {
+  control::CoreOptions o = control::DefaultCoreOptions();
+  std::string error;
+  ASSERT_TRUE(LoadConfigFile(IRSLAM_SOURCE_DIR "/daemon/irslamd.conf", &o, &error)) << error;
+  // Sensor mounts in the file are rounded to 1e-7.
+  const auto d = control::DefaultCoreOptions();
+  for (int i = 0; i < kNumIrSensors; ++i) {
+    EXPECT_NEAR(o.slam.mounts[i].theta, d.slam.mounts[i].theta, 1e-6);
+    EXPECT_NEAR(o.slam.mounts[i].x, d.slam.mounts[i].x, 1e-6);
+    o.slam.mounts[i] = d.slam.mounts[i];
+  }
+  EXPECT_EQ(DumpConfig(o), DumpConfig(d));
+}
+
+TEST(ConfigTest, OverridesOnlyWhatIsGiven) {
+  control::CoreOptions o = control::DefaultCoreOptions();
+  std::string error;
+  ASSERT_TRUE(ParseConfig(R"({ // comment
+      "wall_follow": {"follow_distance_m": 0.5}, "control": {"period_s": 0.01}})", &o, &error))
+      << error;
+  EXPECT_DOUBLE_EQ(o.wall.follow_distance_m, 0.5);
+  EXPECT_DOUBLE_EQ(o.period_s, 0.01);
+  EXPECT_DOUBLE_EQ(o.wall.cruise_speed_mps, control::DefaultCoreOptions().wall.cruise_speed_mps);
+}
+
+TEST(ConfigTest, RejectsUnknownKeysByFullName) {
+  control::CoreOptions o = control::DefaultCoreOptions();
+  std::string error;
+  EXPECT_FALSE(ParseConfig(R"({"wall_follow": {"follow_distanse_m": 0.5}})", &o, &error));
+  EXPECT_EQ(error, "config: wall_follow.follow_distanse_m is not a known key");
+  EXPECT_FALSE(ParseConfig(R"({"walls": {}})", &o, &error));
+  EXPECT_EQ(error, "config: walls is not a known key");
+}
+
+TEST(ConfigTest, RejectsBadValuesWithOneLineNamingTheKey) {
+  const std::pair<const char*, const char*> cases[] = {
+      {R"({"control": {"period_s": "fast"}})", "config: control.period_s must be a number"},
+      {R"({"control": {"period_s": 5}})", "config: control.period_s must be in [0.001, 1] (got 5)"},
+      {R"({"robot": 3})", "config: robot must be an object"},
+      {R"({"sensors": {"mounts": [[0,0,0]]}})", "config: sensors.mounts must list exactly 7"},
+      {R"({"sensors": {"table": [[0.1, 1.0], [0.2, 2.0]]}})", "config: sensors.table must have"},
+      {R"({"sensors": {"adc_bits": 12.5}})", "config: sensors.adc_bits must be an integer"},
+      {"{\"robot\": {", "config: not valid JSON"},
+      {"[]", "config: the top level must be an object"},
+  };
+  for (const auto& [text, want] : cases) {
+    control::CoreOptions o = control::DefaultCoreOptions();
+    const std::string before = DumpConfig(o);
+    std::string error;
+    EXPECT_FALSE(ParseConfig(text, &o, &error)) << text;
+    EXPECT_EQ(error.rfind(want, 0), 0u) << text << " -> " << error;
+    EXPECT_EQ(error.find('\n'), std::string::npos);
+    EXPECT_EQ(DumpConfig(o), before) << "a rejected config must change nothing";
+  }
+}
+
+TEST(ConfigTest, MissingFileIsOneLine) {
+  control::CoreOptions o;
+  std::string error;
+  EXPECT_FALSE(LoadConfigFile("/nonexistent/irslamd.conf", &o, &error));
+  EXPECT_EQ(error, "config: cannot read /nonexistent/irslamd.conf");
+}
+
+}  // namespace
+}  // namespace irslam

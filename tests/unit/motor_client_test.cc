@@ -1,0 +1,107 @@
+#include <gtest/gtest.h>
+
+#include "drivers/motor_client.h"
+
+namespace irslam::drivers {
+namespace {
+
+using proto::Encode;
+
+TEST(Unwrapper16Test, UnwrapsAcrossTheWrapBothWays) {
+  Unwrapper16 u;
+  EXPECT_EQ(u.Update(65530), 65530);
+  EXPECT_EQ(u.Update(4), 65540);
+  EXPECT_EQ(u.Update(65534), 65534);  // backwards across the wrap
+  EXPECT_EQ(u.Update(100), 65636);
+}
+
+TEST(MotorClientTest, EncoderCountsAreUnwrappedAndTimestamped) {
+  MotorClient c{MotorClientOptions{}};
+  auto ev = c.Handle(Encode(proto::EncoderCounts{65530, 65500, 10, 0}), 0.0);
+  ASSERT_TRUE(ev.ticks);
+  EXPECT_DOUBLE_EQ(ev.ticks->t, 65.530);
+  ev = c.Handle(Encode(proto::EncoderCounts{4, 30, 65500, 1}), 0.01);  // both wrap
+  ASSERT_TRUE(ev.ticks);
+  EXPECT_DOUBLE_EQ(ev.ticks->t, 65.540);
+  EXPECT_EQ(ev.ticks->left - 65500, 66);
+  EXPECT_EQ(ev.ticks->right - 10, -46);
+  EXPECT_EQ(c.counters().seq_gap_encoder, 0u);
+}
+
+TEST(MotorClientTest, CountsSequenceGaps) {
+  MotorClient c{MotorClientOptions{}};
+  c.Handle(Encode(proto::EncoderCounts{0, 0, 0, 254}), 0);
+  c.Handle(Encode(proto::EncoderCounts{10, 0, 0, 255}), 0);
+  c.Handle(Encode(proto::EncoderCounts{20, 0, 0, 0}), 0);  // wraps: no gap
+  c.Handle(Encode(proto::EncoderCounts{40, 0, 0, 2}), 0);  // 1 missing
+  EXPECT_EQ(c.counters().seq_gap_encoder, 1u);
+}
+
+TEST(MotorClientTest, PairsIrHalvesBySequence) {
+  MotorClient c{MotorClientOptions{}};
+  EXPECT_FALSE(c.Handle(Encode(proto::IrA{5, 1000, {1, 2, 3}}), 0).ir_adc);
+  auto ev = c.Handle(Encode(proto::IrB{5, {4, 5, 6, 7}}), 0);
+  ASSERT_TRUE(ev.ir_adc);
+  EXPECT_EQ(*ev.ir_adc, (std::array<uint16_t, 7>{1, 2, 3, 4, 5, 6, 7}));
+  EXPECT_DOUBLE_EQ(ev.ir_t, 1.0);
+  // A B half without its A half is dropped and counted.
+  c.Handle(Encode(proto::IrA{6, 1038, {1, 2, 3}}), 0);
+  EXPECT_FALSE(c.Handle(Encode(proto::IrB{7, {4, 5, 6, 7}}), 0).ir_adc);
+  EXPECT_EQ(c.counters().ir_unpaired, 2u);
+  EXPECT_EQ(c.counters().ir_samples, 1u);
+}
+
+TEST(MotorClientTest, DetectsControllerLossAndRecovery) {
+  MotorClient c{MotorClientOptions{0.1}};
+  EXPECT_FALSE(c.ControllerAlive(0));
+  c.Handle(Encode(proto::EncoderCounts{0, 0, 0, 0}), 1.00);
+  c.Handle(Encode(proto::ControllerStatus{}), 1.00);
+  EXPECT_TRUE(c.ControllerAlive(1.05));
+  EXPECT_FALSE(c.ControllerAlive(1.11));
+  EXPECT_STREQ(c.LossReason(1.11), "encoder frames timed out");
+  c.Handle(Encode(proto::EncoderCounts{120, 0, 0, 1}), 1.12);
+  EXPECT_TRUE(c.ControllerAlive(1.13));
+}
+
+TEST(MotorClientTest, ControllerResetKeepsTimeAndCountsContinuous) {
+  MotorClient c{MotorClientOptions{}};
+  c.Handle(Encode(proto::EncoderCounts{30000, 5000, 6000, 10}), 0);
+  auto before = c.Handle(Encode(proto::EncoderCounts{30010, 5010, 6010, 11}), 0);
+  // The controller restarts: its clock and counters start again from zero.
+  auto after = c.Handle(Encode(proto::EncoderCounts{5, 0, 0, 0}), 0);
+  ASSERT_TRUE(before.ticks && after.ticks);
+  EXPECT_EQ(c.counters().controller_resets, 1u);
+  EXPECT_GT(after.ticks->t, before.ticks->t);
+  EXPECT_EQ(after.ticks->left, before.ticks->left);
+  EXPECT_EQ(after.ticks->right, before.ticks->right);
+  auto next = c.Handle(Encode(proto::EncoderCounts{15, 7, 9, 1}), 0);
+  EXPECT_EQ(next.ticks->left - after.ticks->left, 7);
+  EXPECT_EQ(next.ticks->right - after.ticks->right, 9);
+}
+
+TEST(MotorClientTest, CountsBadFramesByReason) {
+  MotorClient c{MotorClientOptions{}};
+  can_frame f = Encode(proto::EncoderCounts{});
+  f.can_dlc = 3;
+  c.Handle(f, 0);
+  f.can_id = 0x555;
+  c.Handle(f, 0);
+  c.Handle(Encode(proto::WheelCommand{}), 0);  // another node's command: not for us
+  EXPECT_EQ(c.counters().wrong_dlc, 1u);
+  EXPECT_EQ(c.counters().unknown_id, 1u);
+  EXPECT_EQ(c.counters().ignored, 1u);
+  EXPECT_EQ(c.counters().encoder_frames, 0u);
+}
+
+TEST(MotorClientTest, CommandsCarrySequenceAndZeroWhenDisabled) {
+  MotorClient c{MotorClientOptions{}};
+  auto a = std::get<proto::WheelCommand>(proto::Decode(c.MakeCommand({0.1, 0.2, true})).message);
+  auto b = std::get<proto::WheelCommand>(proto::Decode(c.MakeCommand({0.1, 0.2, false})).message);
+  EXPECT_EQ(a.seq + 1, b.seq);
+  EXPECT_DOUBLE_EQ(a.right_mps, 0.2);
+  EXPECT_FALSE(b.enable);
+  EXPECT_DOUBLE_EQ(b.left_mps, 0.0);
+}
+
+}  // namespace
+}  // namespace irslam::drivers

@@ -1,0 +1,91 @@
+#include <gtest/gtest.h>
+
+#include "control/robot_core.h"
+#include "control/wall_follower.h"
+
+namespace irslam::control {
+namespace {
+
+// Ranges the default sensor ring would read with a wall parallel to the heading at
+// distance d on the right (from the robot centre), rotated by `angle` (wall turns left).
+RangeScan WallOnRight(double d, double angle) {
+  const auto mounts = DefaultCoreOptions().slam.mounts;
+  RangeScan s;
+  for (int i = 0; i < kNumIrSensors; ++i) {
+    const auto& m = mounts[i];
+    // Wall: points q with n.q = -d, normal n = (sin a, -cos a) pointing away (right).
+    const double nx = std::sin(angle), ny = -std::cos(angle);
+    const double dir = nx * std::cos(m.theta) + ny * std::sin(m.theta);
+    if (dir <= 1e-6) continue;
+    const double r = (d - (nx * m.x + ny * m.y)) / dir;
+    if (r >= 0.2 && r <= 1.2) s.range_m[i] = r;
+  }
+  return s;
+}
+
+TEST(WallFollowerTest, EstimatesTheRightWall) {
+  const auto o = DefaultCoreOptions();
+  WallFollower f(o.wall, o.slam.mounts, 0.17);
+  auto w = f.RightWall(WallOnRight(0.40, 0.0));
+  ASSERT_TRUE(w);
+  EXPECT_NEAR(w->distance_m, 0.40, 1e-9);
+  EXPECT_NEAR(w->angle_rad, 0.0, 1e-9);
+  w = f.RightWall(WallOnRight(0.45, 0.2));
+  ASSERT_TRUE(w);
+  EXPECT_NEAR(w->distance_m, 0.45, 1e-9);
+  EXPECT_NEAR(w->angle_rad, 0.2, 1e-9);
+  EXPECT_FALSE(f.RightWall(WallOnRight(1.0, 0.0)));  // farther than follow + margin
+}
+
+TEST(WallFollowerTest, SteersBackTowardsTheFollowDistance) {
+  const auto o = DefaultCoreOptions();
+  WallFollower f(o.wall, o.slam.mounts, 0.17);
+  // Find the wall first (it is right there), then follow.
+  RangeScan near = WallOnRight(0.40, 0.0);
+  f.Step(0.00, near, false);
+  f.Step(0.02, near, false);
+  ASSERT_EQ(f.mode(), FollowMode::kFollow);
+  const Twist too_far = f.Step(0.04, WallOnRight(0.55, 0.0), false);
+  EXPECT_LT(too_far.omega, 0);  // turn right, towards the wall
+  EXPECT_NEAR(too_far.omega, -o.wall.k_distance * 0.15, 1e-9);
+  const Twist too_close = f.Step(0.06, WallOnRight(0.30, 0.0), false);
+  EXPECT_GT(too_close.omega, 0);
+  EXPECT_GT(too_close.v, 0);
+}
+
+TEST(WallFollowerTest, TurnsLeftAtAnInnerCorner) {
+  const auto o = DefaultCoreOptions();
+  WallFollower f(o.wall, o.slam.mounts, 0.17);
+  RangeScan s = WallOnRight(0.40, 0.0);
+  f.Step(0.00, s, false);
+  f.Step(0.02, s, false);
+  s.range_m[3] = 0.35;  // a wall straight ahead, 40 cm from the centre
+  const Twist t = f.Step(0.04, s, false);
+  EXPECT_EQ(f.mode(), FollowMode::kInnerCorner);
+  EXPECT_DOUBLE_EQ(t.v, 0);
+  EXPECT_DOUBLE_EQ(t.omega, o.wall.turn_rate_rad_s);
+}
+
+TEST(WallFollowerTest, ArcsRightAtAnOuterCorner) {
+  const auto o = DefaultCoreOptions();
+  WallFollower f(o.wall, o.slam.mounts, 0.17);
+  RangeScan s = WallOnRight(0.40, 0.0);
+  f.Step(0.00, s, false);
+  f.Step(0.02, s, false);
+  f.Step(0.04, RangeScan{}, false);  // the wall ends
+  const Twist t = f.Step(0.06, RangeScan{}, false);
+  EXPECT_EQ(f.mode(), FollowMode::kOuterCorner);
+  EXPECT_GT(t.v, 0);
+  EXPECT_NEAR(t.omega, -o.wall.outer_arc_speed_mps / o.wall.follow_distance_m, 1e-12);
+}
+
+TEST(WallFollowerTest, BacksOffWhenBumped) {
+  const auto o = DefaultCoreOptions();
+  WallFollower f(o.wall, o.slam.mounts, 0.17);
+  const Twist t = f.Step(0.0, RangeScan{}, true);
+  EXPECT_EQ(f.mode(), FollowMode::kBackoff);
+  EXPECT_LT(t.v, 0);
+}
+
+}  // namespace
+}  // namespace irslam::control

@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# README command 2: installs what is missing, builds, runs every test.
+#   vcan-scripts/test.sh [--werror] [--sanitize]
+# Unit tests, then the integration tests with real processes (irslam-sim serve +
+# irslamd + irslamctl over the loopback bus, time-scaled).
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+cmake_args=()
+for arg in "$@"; do
+  case "$arg" in
+    --werror) cmake_args+=(-DIRSLAM_WERROR=ON) ;;
+    --sanitize) cmake_args+=(-DIRSLAM_SANITIZE=ON); IRSLAM_BUILD=$IRSLAM_ROOT/build-asan ;;
+    *) echo "test.sh: unknown option '$arg'" >&2; exit 2 ;;
+  esac
+done
+irslam_build "${cmake_args[@]}"
+cd "$IRSLAM_BUILD"
+ctest --output-on-failure -j2 --timeout 600
