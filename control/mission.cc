@@ -119,17 +119,33 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
     if (follower_.mode() == FollowMode::kFollow && !have_anchor_) {
       have_anchor_ = true;
       anchor_ = slam.pose();
+      last_pose_ = anchor_;
+      turned_since_anchor_ = 0;
       anchor_distance_ = slam.distance_m();
+    }
+    if (have_anchor_) {
+      turned_since_anchor_ += NormalizeAngle(slam.pose().theta - last_pose_.theta);
+      last_pose_ = slam.pose();
     }
     if (have_anchor_ && slam.distance_m() - anchor_distance_ > options_.loop_min_distance_m) {
       const Pose2& p = slam.pose();
       const double d = std::hypot(p.x - anchor_.x, p.y - anchor_.y);
       const double a = std::abs(NormalizeAngle(p.theta - anchor_.theta));
       if (d < options_.loop_close_radius_m && a < options_.loop_close_angle_rad) {
-        // One full loop: model the room. (Exploration of free objects builds on this.)
-        Enter(MissionState::kModel, t, "wall-following loop closed");
-        last_cmd_ = {};
-        return {};
+        if (turned_since_anchor_ < -M_PI) {
+          // With the wall on the right, the room's inside is walked counter-
+          // clockwise (+2 pi) and a free object's outside clockwise (-2 pi): this
+          // was a free object, not the room. Leave it and find a wall.
+          ++objects_left_;
+          have_anchor_ = false;
+          follower_.Leave(t);
+          reason_ = "circled a free object; looking for a wall";
+        } else {
+          // One full loop of the room: model it. (Exploration builds on this.)
+          Enter(MissionState::kModel, t, "wall-following loop closed");
+          last_cmd_ = {};
+          return {};
+        }
       }
     }
     return ToWheels(tw, dt);

@@ -65,6 +65,9 @@ class Mission {
   double last_t_ = 0;
   bool have_anchor_ = false;
   Pose2 anchor_;
+  Pose2 last_pose_;
+  double turned_since_anchor_ = 0;  // net heading change while following (+: ccw)
+  int objects_left_ = 0;  // free objects circled by mistake and left
   double anchor_distance_ = 0;
   double progress_distance_ = 0;
   double progress_t_ = 0;

@@ -31,6 +31,7 @@ const char* ToString(FollowMode m) {
     case FollowMode::kInnerCorner: return "inner_corner";
     case FollowMode::kOuterCorner: return "outer_corner";
     case FollowMode::kBackoff: return "backoff";
+    case FollowMode::kLeave: return "leave";
   }
   return "?";
 }
@@ -44,6 +45,11 @@ void WallFollower::Reset() {
   mode_ = FollowMode::kFind;
   has_followed_ = false;
   turned_rad_ = 0;
+}
+
+void WallFollower::Leave(double t) {
+  Enter(FollowMode::kLeave, t);
+  has_followed_ = false;
 }
 
 void WallFollower::Enter(FollowMode m, double t) {
@@ -116,6 +122,14 @@ Twist WallFollower::Step(double t, const RangeScan& scan, bool bumped) {
       }
       break;
     }
+    case FollowMode::kLeave:
+      if (turned_rad_ >= M_PI / 2) {
+        Enter(FollowMode::kFind, t);
+        out = {o.cruise_speed_mps, 0};
+        break;
+      }
+      out = {0, o.turn_rate_rad_s};
+      break;
     case FollowMode::kFind:
       if ((front && *front < o.follow_distance_m + 0.15) || (wall && wall->distance_m < o.follow_distance_m + 0.1)) {
         Enter(FollowMode::kAlign, t);

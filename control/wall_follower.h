@@ -30,7 +30,7 @@ struct WallFollowerOptions {
 };
 
 // Which case of the follower is active (shown in status).
-enum class FollowMode { kFind, kAlign, kFollow, kInnerCorner, kOuterCorner, kBackoff };
+enum class FollowMode { kFind, kAlign, kFollow, kInnerCorner, kOuterCorner, kBackoff, kLeave };
 const char* ToString(FollowMode m);
 
 struct Twist {
@@ -52,6 +52,9 @@ class WallFollower {
   // One control step at robot time t with the latest scan; bumped: a bumper is pressed.
   Twist Step(double t, const RangeScan& scan, bool bumped);
   void Reset();
+  // Turn away (left, a quarter turn) from what is being followed and look for
+  // another wall: used when the contour followed was a free object, not the room.
+  void Leave(double t);
   FollowMode mode() const { return mode_; }
   // True once a wall has been found and followed.
   bool following() const { return has_followed_; }
