@@ -94,6 +94,8 @@ nlohmann::json MatrixJson(const Eigen::MatrixXd& m) {
 
 nlohmann::json RobotCore::Status(double now_s) const {
   const auto& c = motor_.counters();
+  const Eigen::Matrix3d cov = slam_.map_pose_cov();
+  const auto& st = slam_.stats();
   nlohmann::json ranges = nlohmann::json::array();
   for (const auto& r : scan_.range_m) ranges.push_back(r ? nlohmann::json(*r) : nlohmann::json());
   nlohmann::json s = {
@@ -101,11 +103,14 @@ nlohmann::json RobotCore::Status(double now_s) const {
       {"reason", mission_.reason()},
       {"behaviour", ToString(mission_.wall_follower().mode())},
       {"robot_time", now_s},
-      {"pose", PoseJson(slam_.pose())},
-      {"pose_std", {std::sqrt(slam_.pose_cov()(0, 0)), std::sqrt(slam_.pose_cov()(1, 1)),
-                    std::sqrt(slam_.pose_cov()(2, 2))}},
+      {"pose", PoseJson(slam_.map_pose())},
+      {"pose_std", {std::sqrt(cov(0, 0)), std::sqrt(cov(1, 1)), std::sqrt(cov(2, 2))}},
       {"distance", slam_.distance_m()},
-      {"lines", slam_.lines().size()},
+      {"lines", slam_.num_lines()},
+      {"slam", {{"windows", st.windows}, {"lines_extracted", st.lines_extracted},
+                {"updates", st.updates}, {"insertions", st.insertions},
+                {"rejected_angle", st.rejected_angle}, {"merges", st.merges},
+                {"loop_closures", st.loop_closures}}},
       {"objects", 0},
       {"ir_ranges", ranges},
       {"ir_adc", last_adc_},
@@ -134,22 +139,23 @@ nlohmann::json RobotCore::Status(double now_s) const {
 
 nlohmann::json RobotCore::Map() const {
   nlohmann::json lines = nlohmann::json::array();
-  for (const auto& l : slam_.lines()) {
+  for (const auto& l : slam_.map_lines()) {
     lines.push_back({{"id", l.id},
                      {"rho", l.rho},
                      {"theta", l.theta},
                      {"cov", MatrixJson(l.cov)},
                      {"p0", {l.p0.x(), l.p0.y()}},
                      {"p1", {l.p1.x(), l.p1.y()}},
-                     {"length", l.length()}});
+                     {"length", l.length()},
+                     {"observations", l.observations}});
   }
   nlohmann::json traj = nlohmann::json::array();
-  for (const auto& p : slam_.trajectory()) traj.push_back({p.t, p.pose.x, p.pose.y, p.pose.theta});
+  for (const auto& p : slam_.map_trajectory()) traj.push_back({p.t, p.pose.x, p.pose.y, p.pose.theta});
   return {
       {"frame", "map"},
       {"state", ToString(mission_.state())},
-      {"pose", PoseJson(slam_.pose())},
-      {"pose_cov", MatrixJson(slam_.pose_cov())},
+      {"pose", PoseJson(slam_.map_pose())},
+      {"pose_cov", MatrixJson(slam_.map_pose_cov())},
       {"lines", lines},
       {"room", {{"walls", {{"bottom", nlohmann::json::array()},
                            {"right", nlohmann::json::array()},

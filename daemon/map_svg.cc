@@ -72,9 +72,19 @@ std::string RenderMapSvg(const nlohmann::json& map, const nlohmann::json& truth,
   const bool have_truth = truth.is_object() && truth.contains("trajectory") &&
                           !truth["trajectory"].empty();
   if (have_truth) {
-    // The map frame starts at the robot's start pose (odometry origin).
+    // Map -> world: the robot's first pose is known in both frames (the truth's
+    // start and the map trajectory's first point), so world = start o map0^-1.
     const auto& p = truth["trajectory"][0];
-    xf = {p[1].get<double>(), p[2].get<double>(), p[3].get<double>()};
+    double mx = 0, my = 0, mth = 0;
+    if (map.is_object() && map.contains("trajectory") && !map["trajectory"].empty()) {
+      const auto& q = map["trajectory"][0];
+      mx = q[1].get<double>();
+      my = q[2].get<double>();
+      mth = q[3].get<double>();
+    }
+    const double th = p[3].get<double>() - mth;
+    const double ct = std::cos(th), st = std::sin(th);
+    xf = {p[1].get<double>() - (ct * mx - st * my), p[2].get<double>() - (st * mx + ct * my), th};
   }
   if (world.is_object()) {
     std::vector<std::pair<double, double>> outline;

@@ -1,25 +1,357 @@
 #include "slam/slam.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace irslam::slam {
+namespace {
+
+Eigen::Vector2d Transform(const Pose2& p, const Eigen::Vector2d& v) {
+  const double c = std::cos(p.theta), s = std::sin(p.theta);
+  return {p.x + c * v.x() - s * v.y(), p.y + s * v.x() + c * v.y()};
+}
+
+Eigen::Vector2d InverseTransform(const Pose2& p, const Eigen::Vector2d& v) {
+  const double c = std::cos(p.theta), s = std::sin(p.theta);
+  const double dx = v.x() - p.x, dy = v.y() - p.y;
+  return {c * dx + s * dy, -s * dx + c * dy};
+}
+
+Eigen::Vector2d Direction(double theta) { return {-std::sin(theta), std::cos(theta)}; }
+Eigen::Vector2d Normal(double theta) { return {std::cos(theta), std::sin(theta)}; }
+
+}  // namespace
 
 Slam::Slam(SlamOptions options) : options_(options), odometry_(options.geometry) {}
+
+Pose2 Slam::ToMap(const Pose2& p) const {
+  const double c = std::cos(map_rotation_), s = std::sin(map_rotation_);
+  return {c * p.x - s * p.y, s * p.x + c * p.y, NormalizeAngle(p.theta + map_rotation_)};
+}
+
+Eigen::Matrix3d Slam::map_pose_cov() const {
+  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+  r.topLeftCorner<2, 2>() << std::cos(map_rotation_), -std::sin(map_rotation_),
+      std::sin(map_rotation_), std::cos(map_rotation_);
+  return r * ekf_.P().topLeftCorner<3, 3>() * r.transpose();
+}
+
+std::vector<LineFeature> Slam::map_lines() const {
+  std::vector<LineFeature> out = lines_;
+  const Pose2 rot{0, 0, map_rotation_};
+  for (auto& l : out) {
+    l.theta = NormalizeAngle(l.theta + map_rotation_);  // rho is invariant under rotation
+    l.p0 = Transform(rot, l.p0);
+    l.p1 = Transform(rot, l.p1);
+  }
+  return out;
+}
+
+std::vector<TrajectoryPoint> Slam::map_trajectory() const {
+  std::vector<TrajectoryPoint> out = trajectory_;
+  for (auto& p : out) p.pose = ToMap(p.pose);
+  return out;
+}
+
+int Slam::IndexOf(int id) const {
+  for (size_t i = 0; i < lines_.size(); ++i) {
+    if (lines_[i].id == id) return static_cast<int>(i);
+  }
+  return -1;
+}
 
 void Slam::AddWheelTicks(const WheelTicks& ticks) {
   const std::optional<Motion> m = odometry_.Add(ticks);
   if (!m) {
-    trajectory_.push_back({ticks.t, pose_});
+    trajectory_.push_back({ticks.t, ekf_.pose()});
     return;
   }
-  // Prediction step: pose and covariance follow the motion model.
-  const Eigen::Matrix3d f = Odometry::JacobianPose(pose_, *m);
-  pose_cov_ = f * pose_cov_ * f.transpose() +
-              Odometry::ProcessNoise(pose_, *m, options_.motion_noise);
-  pose_ = Odometry::Apply(pose_, *m);
+  ekf_.Predict(*m, options_.motion_noise);
   if (trajectory_.empty() || ticks.t - trajectory_.back().t >= options_.trajectory_period_s) {
-    trajectory_.push_back({ticks.t, pose_});
+    trajectory_.push_back({ticks.t, ekf_.pose()});
   }
 }
 
-void Slam::AddRangeScan(const RangeScan& /*scan*/) {}
+void Slam::AddRangeScan(const RangeScan& scan) {
+  const Pose2& o = odometry_.pose();
+  if (have_last_scan_pose_) {
+    const double moved = std::hypot(o.x - last_scan_pose_.x, o.y - last_scan_pose_.y);
+    const double turned = std::abs(NormalizeAngle(o.theta - last_scan_pose_.theta));
+    // The PDS takes a scan only after a minimum pose change (§3.1).
+    if (moved < options_.pds.min_step_m && turned < options_.pds.min_turn_rad) return;
+    window_distance_ += moved;
+    window_turn_ += turned;
+  }
+  have_last_scan_pose_ = true;
+  last_scan_pose_ = o;
+  for (int i = 0; i < kNumIrSensors; ++i) {
+    if (!scan.range_m[i] || *scan.range_m[i] > options_.pds.max_range_m) continue;
+    const SensorMount& m = options_.mounts[i];
+    const Eigen::Vector2d in_robot(m.x + *scan.range_m[i] * std::cos(m.theta),
+                                   m.y + *scan.range_m[i] * std::sin(m.theta));
+    pds_points_.push_back(Transform(o, in_robot));
+  }
+  pds_positions_.emplace_back(o.x, o.y);
+  if (window_distance_ >= options_.pds.window_m || window_turn_ >= options_.pds.window_rad) {
+    CloseWindow();
+  }
+}
+
+void Slam::CloseWindow() {
+  ++stats_.windows;
+  // Express the window in the robot frame now, so lines come out as observations.
+  const Pose2& o = odometry_.pose();
+  Points pts;
+  pts.reserve(pds_points_.size());
+  for (const auto& p : pds_points_) pts.push_back(InverseTransform(o, p));
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  for (const auto& p : pds_positions_) centre += InverseTransform(o, p);
+  if (!pds_positions_.empty()) centre /= static_cast<double>(pds_positions_.size());
+  const std::vector<ExtractedLine> lines = ExtractLines(pts, centre, options_.extraction);
+  stats_.lines_extracted += static_cast<int>(lines.size());
+  pds_points_.clear();
+  pds_positions_.clear();
+  window_distance_ = 0;
+  window_turn_ = 0;
+  ProcessLines(lines);
+}
+
+void Slam::ProcessLines(const std::vector<ExtractedLine>& lines) {
+  for (const auto& l : lines) Associate(l);
+  MergeOverlapping();
+}
+
+double Slam::Overlap(int i, const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+  // Lov (eq. 16): l_i + l_j - span of both, along line i; > 0 when they overlap.
+  const Eigen::Vector2d dir = Direction(ekf_.theta(i));
+  const double a0 = dir.dot(lines_[i].p0), a1 = dir.dot(lines_[i].p1);
+  const double b0 = dir.dot(a), b1 = dir.dot(b);
+  return std::min(std::max(a0, a1), std::max(b0, b1)) - std::max(std::min(a0, a1), std::min(b0, b1));
+}
+
+void Slam::AppendConstraintRows(int index, std::vector<Eigen::RowVectorXd>* h,
+                                std::vector<double>* y, std::vector<double>* r) const {
+  if (!options_.association.use_constraints || index == 0) return;
+  const long n = ekf_.x().size();
+  const double sc = options_.association.constraint_sigma_rad;
+  // Eq. (11): theta_1 - theta_k (- pi/2) = 0, for parallel and orthogonal lines alike.
+  Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(n);
+  row(4 + 2 * index) = 1;
+  row(4) = -1;
+  h->push_back(row);
+  y->push_back(-AngleModHalfPi(ekf_.theta(index) - ekf_.theta(0)));
+  r->push_back(sc * sc);
+  // Eq. (12): a collinear piece of another wall: [rho_w - rho_w', theta_w - theta_w'] = 0.
+  const int partner = lines_[index].collinear_with ? IndexOf(lines_[index].collinear_with) : -1;
+  if (partner >= 0) {
+    const double sr = options_.association.collinear_sigma_m;
+    Eigen::RowVectorXd rr = Eigen::RowVectorXd::Zero(n), rt = Eigen::RowVectorXd::Zero(n);
+    rr(3 + 2 * index) = 1;
+    rr(3 + 2 * partner) = -1;
+    rt(4 + 2 * index) = 1;
+    rt(4 + 2 * partner) = -1;
+    h->push_back(rr);
+    y->push_back(-(ekf_.rho(index) - ekf_.rho(partner)));
+    r->push_back(sr * sr);
+    h->push_back(rt);
+    y->push_back(-NormalizeAngle(ekf_.theta(index) - ekf_.theta(partner)));
+    r->push_back(sc * sc);
+  }
+}
+
+void Slam::ApplyConstraintsOnly(int index) {
+  std::vector<Eigen::RowVectorXd> rows;
+  std::vector<double> y, r;
+  AppendConstraintRows(index, &rows, &y, &r);
+  if (rows.empty()) return;
+  const long m = static_cast<long>(rows.size());
+  Eigen::MatrixXd h(m, ekf_.x().size());
+  Eigen::VectorXd yy(m);
+  Eigen::MatrixXd rr = Eigen::MatrixXd::Zero(m, m);
+  for (long k = 0; k < m; ++k) {
+    h.row(k) = rows[static_cast<size_t>(k)];
+    yy(k) = y[static_cast<size_t>(k)];
+    rr(k, k) = r[static_cast<size_t>(k)];
+  }
+  ekf_.Update(yy, h, rr);
+}
+
+int Slam::InsertLine(const ExtractedLine& obs, int collinear_with_index) {
+  const Eigen::Matrix2d r = obs.cov * options_.association.measurement_cov_scale;
+  const Pose2 pose = ekf_.pose();
+  const int index = ekf_.AddLine({obs.rho, obs.theta}, r);
+  LineFeature f;
+  f.id = next_id_++;
+  f.observations = 1;
+  f.collinear_with = collinear_with_index >= 0 ? lines_[static_cast<size_t>(collinear_with_index)].id : 0;
+  f.p0 = Transform(pose, obs.p0);
+  f.p1 = Transform(pose, obs.p1);
+  lines_.push_back(f);
+  ++stats_.insertions;
+  if (index == 0) {
+    // The first line is a wall and fixes the map's orientation: its angle is
+    // pinned (a near-zero-noise pseudo-measurement), and the map frame is the
+    // internal frame turned so that this wall lies along x (theta_1 = pi/2).
+    Eigen::MatrixXd h = Eigen::MatrixXd::Zero(1, ekf_.x().size());
+    h(0, 4) = 1;
+    Eigen::MatrixXd rr(1, 1);
+    rr(0, 0) = 1e-12;
+    ekf_.Update(Eigen::VectorXd::Zero(1), h, rr);
+    map_rotation_ = NormalizeAngle(M_PI / 2 - ekf_.theta(0));
+  } else {
+    ApplyConstraintsOnly(index);
+  }
+  ReprojectEndpoints();
+  return index;
+}
+
+void Slam::ExtendEndpoints(int index, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  // Project the outermost points onto the (updated) line: the segment only grows.
+  LineFeature& l = lines_[static_cast<size_t>(index)];
+  const double th = ekf_.theta(index), rho = ekf_.rho(index);
+  const Eigen::Vector2d dir = Direction(th), nrm = Normal(th);
+  const double s[4] = {dir.dot(l.p0), dir.dot(l.p1), dir.dot(a), dir.dot(b)};
+  const double lo = *std::min_element(s, s + 4), hi = *std::max_element(s, s + 4);
+  l.p0 = rho * nrm + lo * dir;
+  l.p1 = rho * nrm + hi * dir;
+}
+
+void Slam::ReprojectEndpoints() {
+  for (size_t i = 0; i < lines_.size(); ++i) {
+    LineFeature& l = lines_[i];
+    const int k = static_cast<int>(i);
+    const Eigen::Vector2d dir = Direction(ekf_.theta(k)), nrm = Normal(ekf_.theta(k));
+    l.p0 = ekf_.rho(k) * nrm + dir.dot(l.p0) * dir;
+    l.p1 = ekf_.rho(k) * nrm + dir.dot(l.p1) * dir;
+    l.rho = ekf_.rho(k);
+    l.theta = ekf_.theta(k);
+    l.cov = ekf_.LineCov(k);
+  }
+}
+
+void Slam::Associate(const ExtractedLine& obs) {
+  const Pose2 pose = ekf_.pose();
+  double rho_m, theta_m;
+  ObservationToMap(pose, {obs.rho, obs.theta}, &rho_m, &theta_m, nullptr, nullptr);
+  const Eigen::Vector2d a = Transform(pose, obs.p0), b = Transform(pose, obs.p1);
+  if (lines_.empty()) {
+    InsertLine(obs, -1);
+    return;
+  }
+  const auto& ao = options_.association;
+  // Only lines parallel or orthogonal to the first wall are mapped.
+  if (std::abs(AngleModHalfPi(theta_m - ekf_.theta(0))) > ao.angle_tolerance_rad) {
+    ++stats_.rejected_angle;
+    return;
+  }
+  // Eq. (13): the weighted Hough distance to every mapped line; keep the nearest.
+  int best = -1;
+  double best_dh = ao.max_dh;
+  for (int i = 0; i < ekf_.num_lines(); ++i) {
+    double dr = rho_m - ekf_.rho(i);
+    double dt = NormalizeAngle(theta_m - ekf_.theta(i));
+    if (std::abs(dt) > M_PI / 2) {  // the same line seen with the opposite normal (rho ~ 0)
+      dr = -rho_m - ekf_.rho(i);
+      dt = NormalizeAngle(dt + M_PI);
+    }
+    const double dh = ao.weight_rho * dr * dr + ao.weight_theta * dt * dt;
+    if (dh < best_dh) {
+      best_dh = dh;
+      best = i;
+    }
+  }
+  if (best < 0) {
+    InsertLine(obs, -1);
+    return;
+  }
+  if (Overlap(best, a, b) <= 0) {
+    // Eqs. (14)-(15): collinear with a mapped line but not overlapping it: another
+    // piece of the same wall (furniture in between), tied to it by eq. (12).
+    ++stats_.collinear_insertions;
+    InsertLine(obs, best);
+    return;
+  }
+  // Matched: eq. (10) with the constraints of this line, in one update.
+  Eigen::Matrix<double, 2, 5> j;
+  const LineObservation zhat = PredictObservation(pose, ekf_.rho(best), ekf_.theta(best), &j);
+  const long n = ekf_.x().size();
+  std::vector<Eigen::RowVectorXd> rows;
+  std::vector<double> y, r;
+  for (int k = 0; k < 2; ++k) {
+    Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(n);
+    row.head<3>() = j.row(k).head<3>();
+    row(3 + 2 * best) = j(k, 3);
+    row(4 + 2 * best) = j(k, 4);
+    rows.push_back(row);
+  }
+  y.push_back(obs.rho - zhat.rho);
+  y.push_back(NormalizeAngle(obs.theta - zhat.theta));
+  AppendConstraintRows(best, &rows, &y, &r);
+  const long m = static_cast<long>(rows.size());
+  Eigen::MatrixXd h(m, n);
+  Eigen::VectorXd yy(m);
+  Eigen::MatrixXd rr = Eigen::MatrixXd::Zero(m, m);
+  rr.topLeftCorner<2, 2>() = obs.cov * ao.measurement_cov_scale;
+  for (long k = 0; k < m; ++k) {
+    h.row(k) = rows[static_cast<size_t>(k)];
+    yy(k) = y[static_cast<size_t>(k)];
+    if (k >= 2) rr(k, k) = r[static_cast<size_t>(k - 2)];
+  }
+  ekf_.Update(yy, h, rr);
+  ++stats_.updates;
+  ++lines_[static_cast<size_t>(best)].observations;
+  ReprojectEndpoints();
+  // End points extended with the observation, seen from the corrected pose.
+  const Pose2 corrected = ekf_.pose();
+  ExtendEndpoints(best, Transform(corrected, obs.p0), Transform(corrected, obs.p1));
+  ReprojectEndpoints();
+}
+
+void Slam::MergeOverlapping() {
+  // §4.5: collinear lines that now overlap are one wall: update the older with
+  // the newer (a zero-noise eq. (12) pseudo-measurement), take the outer end
+  // points, delete the newer's rows and columns.
+  bool merged = true;
+  while (merged) {
+    merged = false;
+    for (int i = 0; i < ekf_.num_lines() && !merged; ++i) {
+      for (int k = i + 1; k < ekf_.num_lines() && !merged; ++k) {
+        const auto& ao = options_.association;
+        const double dr = ekf_.rho(i) - ekf_.rho(k);
+        const double dt = NormalizeAngle(ekf_.theta(i) - ekf_.theta(k));
+        const double dh = ao.weight_rho * dr * dr + ao.weight_theta * dt * dt;
+        const bool linked = lines_[static_cast<size_t>(k)].collinear_with == lines_[static_cast<size_t>(i)].id;
+        if (!(linked || dh < ao.max_dh)) continue;
+        if (Overlap(i, lines_[static_cast<size_t>(k)].p0, lines_[static_cast<size_t>(k)].p1) <= 0) continue;
+        const long n = ekf_.x().size();
+        Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2, n);
+        h(0, 3 + 2 * i) = 1;
+        h(0, 3 + 2 * k) = -1;
+        h(1, 4 + 2 * i) = 1;
+        h(1, 4 + 2 * k) = -1;
+        Eigen::VectorXd y(2);
+        y << -dr, -dt;
+        Eigen::MatrixXd r = Eigen::MatrixXd::Zero(2, 2);
+        r(0, 0) = 1e-8;
+        r(1, 1) = 1e-8;
+        ekf_.Update(y, h, r);
+        const LineFeature gone = lines_[static_cast<size_t>(k)];
+        ReprojectEndpoints();
+        ExtendEndpoints(i, gone.p0, gone.p1);
+        lines_[static_cast<size_t>(i)].observations += gone.observations;
+        ekf_.RemoveLine(k);
+        lines_.erase(lines_.begin() + k);
+        for (auto& l : lines_) {
+          if (l.collinear_with == gone.id) l.collinear_with = lines_[static_cast<size_t>(i)].id;
+          if (l.collinear_with == l.id) l.collinear_with = 0;
+        }
+        ++stats_.merges;
+        if (i == 0) ++stats_.loop_closures;
+        ReprojectEndpoints();
+        merged = true;
+      }
+    }
+  }
+}
 
 }  // namespace irslam::slam

@@ -1,6 +1,21 @@
 // The SLAM front door: wheel ticks and range scans in (each with its own time),
 // corrected pose, its covariance, the line map and the trajectory out.
 // Pure: no clock, socket or file.
+//
+// Pipeline (paper §3-4): IR points are accumulated in the odometry frame into a
+// pseudo dense scan (PDS) after each minimum pose change; when the window is
+// complete (distance travelled or angle turned) its points are expressed in the
+// robot frame, lines are extracted (line_extraction.h) and each line is
+// associated (eqs. 13-16) with the map: matched lines update the geometrically
+// constrained EKF (eq. 10 with the eq. 11/12 pseudo-measurements in the same
+// update), collinear pieces are inserted with the collinear constraint, other
+// lines parallel or orthogonal to the first wall are inserted, and the rest are
+// not mapped. Collinear lines that come to overlap are merged (§4.5); a merge
+// into the first line closes the loop.
+//
+// Frames: internally everything lives in the odometry frame of the start (so the
+// pose stays continuous); the map frame of the outputs (map_*) is that frame
+// rotated so the first wall lies along the x axis (theta_1 = pi/2).
 #ifndef IRSLAM_SLAM_SLAM_H_
 #define IRSLAM_SLAM_SLAM_H_
 
@@ -8,6 +23,8 @@
 #include <array>
 #include <vector>
 
+#include "slam/line_ekf.h"
+#include "slam/line_extraction.h"
 #include "slam/odometry.h"
 #include "slam/types.h"
 
@@ -20,11 +37,33 @@ struct SensorMount {
   double theta = 0;
 };
 
+struct PdsOptions {
+  double min_step_m = 0.01;     // a scan joins the PDS after this much motion ...
+  double min_turn_rad = 0.03;   // ... or this much rotation
+  double window_m = 0.6;        // the window closes after this distance ...
+  double window_rad = 0.9;      // ... or this rotation
+  double max_range_m = 1.0;     // readings beyond this are not used for mapping
+};
+
+struct AssociationOptions {
+  double weight_rho = 0.5;          // normalised weights of DH, eq. (13): sum to 1
+  double weight_theta = 0.5;
+  double max_dh = 0.006;            // epsilon_DH
+  double angle_tolerance_rad = 0.14;  // epsilon_theta: parallel/orthogonal to line 1
+  double constraint_sigma_rad = 1e-3; // pseudo-measurement noise, eqs. (11)-(12)
+  double collinear_sigma_m = 1e-3;
+  double measurement_cov_scale = 1.0; // multiplies the eq. (7) covariance
+  bool use_constraints = true;        // off: plain EKF (for comparison, Fig. 17)
+};
+
 struct SlamOptions {
   RobotGeometry geometry;
   MotionNoise motion_noise;
   std::array<SensorMount, kNumIrSensors> mounts{};
   double trajectory_period_s = 0.25;  // trajectory sampling (>= 2 Hz, contracts §4)
+  PdsOptions pds;
+  ExtractionOptions extraction;
+  AssociationOptions association;
 };
 
 struct LineFeature {
@@ -34,12 +73,25 @@ struct LineFeature {
   Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
   Eigen::Vector2d p0 = Eigen::Vector2d::Zero();
   Eigen::Vector2d p1 = Eigen::Vector2d::Zero();
+  int observations = 0;
+  int collinear_with = 0;  // id of the line this one is a collinear piece of (0: none)
   double length() const { return (p1 - p0).norm(); }
 };
 
 struct TrajectoryPoint {
   double t = 0;
   Pose2 pose;
+};
+
+struct SlamStats {
+  int windows = 0;
+  int lines_extracted = 0;
+  int updates = 0;
+  int insertions = 0;
+  int collinear_insertions = 0;
+  int rejected_angle = 0;   // neither parallel nor orthogonal to line 1
+  int merges = 0;
+  int loop_closures = 0;    // merges into the first line
 };
 
 class Slam {
@@ -49,21 +101,57 @@ class Slam {
   void AddWheelTicks(const WheelTicks& ticks);
   void AddRangeScan(const RangeScan& scan);
 
-  const Pose2& pose() const { return pose_; }
-  const Eigen::Matrix3d& pose_cov() const { return pose_cov_; }
-  const std::vector<LineFeature>& lines() const { return lines_; }
-  const std::vector<TrajectoryPoint>& trajectory() const { return trajectory_; }
+  // Internal (odometry-start) frame: continuous, for controllers.
+  Pose2 pose() const { return ekf_.pose(); }
+  // Map frame (first wall along x): for outputs.
+  Pose2 map_pose() const { return ToMap(ekf_.pose()); }
+  Eigen::Matrix3d map_pose_cov() const;
+  std::vector<LineFeature> map_lines() const;
+  std::vector<TrajectoryPoint> map_trajectory() const;
+  Pose2 ToMap(const Pose2& p) const;
+
+  const std::vector<LineFeature>& lines() const { return lines_; }  // internal frame
+  size_t num_lines() const { return lines_.size(); }
+  const LineEkf& ekf() const { return ekf_; }
+  const Pose2& odometry_pose() const { return odometry_.pose(); }
   double distance_m() const { return odometry_.distance_m(); }
   double time() const { return odometry_.last_t(); }
+  const SlamStats& stats() const { return stats_; }
   const SlamOptions& options() const { return options_; }
 
+  // Feeds one window's extracted lines (robot frame) to the map; public so tests
+  // can drive association and the EKF without the PDS.
+  void ProcessLines(const std::vector<ExtractedLine>& lines);
+
  private:
+  void CloseWindow();
+  void Associate(const ExtractedLine& obs);
+  int InsertLine(const ExtractedLine& obs, int collinear_with_index);
+  void ApplyConstraintsOnly(int index);
+  void AppendConstraintRows(int index, std::vector<Eigen::RowVectorXd>* h,
+                            std::vector<double>* y, std::vector<double>* r) const;
+  void ExtendEndpoints(int index, const Eigen::Vector2d& a, const Eigen::Vector2d& b);
+  void ReprojectEndpoints();
+  void MergeOverlapping();
+  double Overlap(int i, const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+  int IndexOf(int id) const;
+
   SlamOptions options_;
   Odometry odometry_;
-  Pose2 pose_;
-  Eigen::Matrix3d pose_cov_ = Eigen::Matrix3d::Zero();
-  std::vector<LineFeature> lines_;
+  LineEkf ekf_;
+  std::vector<LineFeature> lines_;  // lines_[i] is state line i
   std::vector<TrajectoryPoint> trajectory_;
+  SlamStats stats_;
+  int next_id_ = 1;
+  double map_rotation_ = 0;  // internal -> map frame
+
+  // Pseudo dense scan window (odometry frame).
+  Points pds_points_;
+  std::vector<Eigen::Vector2d> pds_positions_;
+  bool have_last_scan_pose_ = false;
+  Pose2 last_scan_pose_;
+  double window_distance_ = 0;
+  double window_turn_ = 0;
 };
 
 }  // namespace irslam::slam

@@ -1,0 +1,136 @@
+#include "slam/line_ekf.h"
+
+#include <Eigen/LU>
+#include <cmath>
+
+#include "slam/line_extraction.h"
+
+namespace irslam::slam {
+
+LineObservation PredictObservation(const Pose2& r, double rho, double theta,
+                                   Eigen::Matrix<double, 2, 5>* jacobian) {
+  const double c = std::cos(theta), s = std::sin(theta);
+  // Eq. (10): d = rho - rx cos(theta) - ry sin(theta); z_rho = |d|;
+  // z_theta = atan2(dy, dx) - rtheta with (dx, dy) = d (cos theta, sin theta).
+  const double d = rho - r.x * c - r.y * s;
+  LineObservation z;
+  double sign = 1;
+  if (d >= 0) {
+    z.rho = d;
+    z.theta = NormalizeAngle(theta - r.theta);
+  } else {
+    sign = -1;  // the robot is on the other side of the line
+    z.rho = -d;
+    z.theta = NormalizeAngle(theta + M_PI - r.theta);
+  }
+  if (jacobian) {
+    auto& j = *jacobian;
+    j << sign * -c, sign * -s, 0, sign * 1, sign * (r.x * s - r.y * c),
+         0, 0, -1, 0, 1;
+  }
+  return z;
+}
+
+void ObservationToMap(const Pose2& r, const LineObservation& z, double* rho, double* theta,
+                      Eigen::Matrix<double, 2, 3>* g_pose, Eigen::Matrix2d* g_obs) {
+  double th = z.theta + r.theta;
+  double c = std::cos(th), s = std::sin(th);
+  double rh = z.rho + r.x * c + r.y * s;
+  const double lever = -r.x * s + r.y * c;  // d rho / d theta
+  Eigen::Matrix<double, 2, 3> gp;
+  gp << c, s, lever,
+        0, 0, 1;
+  Eigen::Matrix2d gz;
+  gz << 1, lever,
+        0, 1;
+  if (rh < 0) {
+    rh = -rh;
+    th += M_PI;
+    gp.row(0) *= -1;
+    gz.row(0) *= -1;
+  }
+  *rho = rh;
+  *theta = NormalizeAngle(th);
+  if (g_pose) *g_pose = gp;
+  if (g_obs) *g_obs = gz;
+}
+
+double AngleModHalfPi(double a) {
+  a = std::remainder(a, M_PI / 2);  // in [-pi/4, pi/4]
+  if (a <= -M_PI / 4) a += M_PI / 2;
+  return a;
+}
+
+LineEkf::LineEkf() : x_(Eigen::VectorXd::Zero(3)), P_(Eigen::MatrixXd::Zero(3, 3)) {}
+
+void LineEkf::Predict(const Motion& m, const MotionNoise& noise) {
+  const Pose2 p = pose();
+  const Eigen::Matrix3d f = Odometry::JacobianPose(p, m);
+  const Eigen::Matrix3d q = Odometry::ProcessNoise(p, m, noise);
+  const Pose2 n = Odometry::Apply(p, m);
+  x_(0) = n.x;
+  x_(1) = n.y;
+  x_(2) = n.theta;
+  const long rest = x_.size() - 3;
+  P_.topLeftCorner<3, 3>() = f * P_.topLeftCorner<3, 3>() * f.transpose() + q;
+  if (rest > 0) {
+    P_.topRightCorner(3, rest) = f * P_.topRightCorner(3, rest);
+    P_.bottomLeftCorner(rest, 3) = P_.topRightCorner(3, rest).transpose();
+  }
+}
+
+int LineEkf::AddLine(const LineObservation& z, const Eigen::Matrix2d& r) {
+  double rho, theta;
+  Eigen::Matrix<double, 2, 3> gp;
+  Eigen::Matrix2d gz;
+  ObservationToMap(pose(), z, &rho, &theta, &gp, &gz);
+  const long n = x_.size();
+  x_.conservativeResize(n + 2);
+  x_(n) = rho;
+  x_(n + 1) = theta;
+  P_.conservativeResize(n + 2, n + 2);
+  // Cross-covariance with everything: G_pose * P(pose, :).
+  const Eigen::MatrixXd cross = gp * P_.topLeftCorner(3, n);
+  P_.block(n, 0, 2, n) = cross;
+  P_.block(0, n, n, 2) = cross.transpose();
+  P_.block<2, 2>(n, n) = gp * P_.topLeftCorner<3, 3>() * gp.transpose() + gz * r * gz.transpose();
+  return static_cast<int>((n - 3) / 2);
+}
+
+void LineEkf::RemoveLine(int i) {
+  const long at = 3 + 2 * i, n = x_.size(), tail = n - at - 2;
+  x_.segment(at, tail) = x_.tail(tail).eval();
+  x_.conservativeResize(n - 2);
+  Eigen::MatrixXd p(n - 2, n - 2);
+  p.topLeftCorner(at, at) = P_.topLeftCorner(at, at);
+  p.topRightCorner(at, tail) = P_.topRightCorner(at, tail);
+  p.bottomLeftCorner(tail, at) = P_.bottomLeftCorner(tail, at);
+  p.bottomRightCorner(tail, tail) = P_.bottomRightCorner(tail, tail);
+  P_ = std::move(p);
+}
+
+void LineEkf::Update(const Eigen::VectorXd& y, const Eigen::MatrixXd& h, const Eigen::MatrixXd& r) {
+  const Eigen::MatrixXd pht = P_ * h.transpose();           // n x m
+  const Eigen::MatrixXd s = h * pht + r;                     // m x m
+  const Eigen::MatrixXd k = pht * s.inverse();               // n x m
+  x_ += k * y;
+  x_(2) = NormalizeAngle(x_(2));
+  // Joseph form, in O(n^2 m): A = (I - K H) P; P = A (I - K H)' + K R K'.
+  const Eigen::MatrixXd a = P_ - k * pht.transpose();
+  P_ = a - (a * h.transpose()) * k.transpose() + k * r * k.transpose();
+  P_ = 0.5 * (P_ + P_.transpose()).eval();
+  for (int i = 0; i < num_lines(); ++i) NormalizeLineState(i);
+}
+
+void LineEkf::NormalizeLineState(int i) {
+  const long at = 3 + 2 * i;
+  if (x_(at) < 0) {
+    x_(at) = -x_(at);
+    x_(at + 1) += M_PI;
+    P_.row(at) *= -1;
+    P_.col(at) *= -1;
+  }
+  x_(at + 1) = NormalizeAngle(x_(at + 1));
+}
+
+}  // namespace irslam::slam
