@@ -116,7 +116,14 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
 
   if (state_ == MissionState::kWallFollow) {
     const Twist tw = follower_.Step(t, scan, bumped);
-    if (follower_.mode() == FollowMode::kFollow && !have_anchor_) {
+    // The loop's anchor: a pose after 1.5 s of steady following, so it lies on
+    // the path the robot will come back along.
+    if (!follower_.steady()) {
+      follow_since_ = -1;
+    } else if (follow_since_ < 0) {
+      follow_since_ = t;
+    }
+    if (follow_since_ >= 0 && t - follow_since_ >= 1.5 && !have_anchor_) {
       have_anchor_ = true;
       anchor_ = slam.pose();
       last_pose_ = anchor_;

@@ -28,7 +28,7 @@ struct MissionOptions {
   double max_time_s = 900;           // whole mission, robot time
   double progress_timeout_s = 120;   // no new distance covered for this long: give up
   double loop_min_distance_m = 3.0;  // wall following must cover this before a loop can close
-  double loop_close_radius_m = 0.5;  // back within this of where wall following started
+  double loop_close_radius_m = 0.25;  // back within this of where wall following started
   double loop_close_angle_rad = 0.7;
   double max_accel_mps2 = 0.8;       // wheel acceleration limit of the command
 };
@@ -64,6 +64,7 @@ class Mission {
   double started_at_ = 0;
   double last_t_ = 0;
   bool have_anchor_ = false;
+  double follow_since_ = -1;
   Pose2 anchor_;
   Pose2 last_pose_;
   double turned_since_anchor_ = 0;  // net heading change while following (+: ccw)

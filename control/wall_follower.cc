@@ -107,6 +107,7 @@ Twist WallFollower::Step(double t, const RangeScan& scan, bool bumped) {
   const auto wall = RightWall(scan);
   const auto& o = options_;
   Twist out;
+  steady_ = false;
 
   if (bumped && mode_ != FollowMode::kBackoff) Enter(FollowMode::kBackoff, t);
 
@@ -186,6 +187,8 @@ Twist WallFollower::Step(double t, const RangeScan& scan, bool bumped) {
       out = {o.outer_arc_speed_mps, 0};
     } else {
       last_wall_angle_ = wall->angle_rad;
+      steady_ = std::abs(wall->angle_rad) < 0.09 &&
+                std::abs(wall->distance_m - o.follow_distance_m) < 0.05;
       double omega = o.k_angle * wall->angle_rad -
                      o.k_distance * (wall->distance_m - o.follow_distance_m);
       omega = std::clamp(omega, -o.max_turn_rate_rad_s, o.max_turn_rate_rad_s);

@@ -58,6 +58,8 @@ class WallFollower {
   FollowMode mode() const { return mode_; }
   // True once a wall has been found and followed.
   bool following() const { return has_followed_; }
+  // Following, parallel to the wall at the follow distance (within 5 cm, ~5 deg).
+  bool steady() const { return mode_ == FollowMode::kFollow && steady_; }
 
   // Exposed for tests.
   std::optional<WallEstimate> RightWall(const RangeScan& scan) const;
@@ -75,6 +77,7 @@ class WallFollower {
   double turned_rad_ = 0;  // rotation accumulated in the current mode
   bool has_followed_ = false;
   double last_wall_angle_ = 0;
+  bool steady_ = false;
 };
 
 }  // namespace irslam::control

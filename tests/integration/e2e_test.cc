@@ -135,11 +135,13 @@ TEST_F(E2eTest, FollowsTheWholePerimeterOverTheBusAndReturnsToItsStart) {
     last_t = t;
     last_dist = (*s)["distance"];
     last_enc = (*s)["frames"]["encoder"];
-    EXPECT_EQ((*s)["state"], "wall_follow") << s->dump();
-    if (t > 140) break;
+    if ((*s)["state"] == "done") break;
+    EXPECT_TRUE((*s)["state"] == "wall_follow" || (*s)["state"] == "model") << s->dump();
     Sleep(0.25);
   }
-  EXPECT_GT(last_t, 140);
+  auto final_status = Status();
+  EXPECT_EQ((*final_status)["state"], "done") << "the loop was not closed";
+  EXPECT_GT(last_t, 60);
   EXPECT_GT(advances, 30);
   ASSERT_GT(follow_t, 0);
   ASSERT_EQ(Ctl({"stop"}), 0);
@@ -149,8 +151,6 @@ TEST_F(E2eTest, FollowsTheWholePerimeterOverTheBusAndReturnsToItsStart) {
   // Coverage of the four walls, and the return to where following began.
   const auto& tr = truth["trajectory"];
   double sx = 0, sy = 0;
-  // The reference point: 5 s into steady wall following.
-  follow_t += 5;
   for (const auto& p : tr) {
     if (p[0].get<double>() >= follow_t) {
       sx = p[1];
@@ -173,7 +173,7 @@ TEST_F(E2eTest, FollowsTheWholePerimeterOverTheBusAndReturnsToItsStart) {
     if (bottom && top && left && right && path > 8) best = std::min(best, std::hypot(x - sx, y - sy));
   }
   EXPECT_TRUE(bottom && right && top && left);
-  EXPECT_LT(best, 0.10) << "did not return to the point where wall following began";
+  EXPECT_LT(best, 0.30) << "did not return to the point where wall following began";
 }
 
 TEST_F(E2eTest, StopHaltsTheWheelsWithinOnePeriod) {
