@@ -44,6 +44,8 @@ bool Mission::Start(double t, std::string* why) {
   }
   started_at_ = t;
   last_t_ = t;
+  loops_done_ = 0;
+  loop_times_.clear();
   Enter(MissionState::kWallFollow, t, "");
   return true;
 }
@@ -147,8 +149,15 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
           have_anchor_ = false;
           follower_.Leave(t);
           reason_ = "circled a free object; looking for a wall";
+        } else if (++loops_done_ < options_.wall_follow_loops) {
+          // Another loop of the room was asked for: keep following from here.
+          loop_times_.push_back(t);
+          anchor_ = slam.pose();
+          anchor_distance_ = slam.distance_m();
+          turned_since_anchor_ = 0;
         } else {
-          // One full loop of the room: model it. (Exploration builds on this.)
+          // The room has been walked all round: model it. (Exploration builds on this.)
+          loop_times_.push_back(t);
           Enter(MissionState::kModel, t, "wall-following loop closed");
           last_cmd_ = {};
           return {};

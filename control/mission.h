@@ -6,6 +6,7 @@
 #define IRSLAM_CONTROL_MISSION_H_
 
 #include <string>
+#include <vector>
 
 #include "control/wall_follower.h"
 #include "slam/slam.h"
@@ -31,6 +32,7 @@ struct MissionOptions {
   double loop_close_radius_m = 0.25;  // back within this of where wall following started
   double loop_close_angle_rad = 0.7;
   double max_accel_mps2 = 0.8;       // wheel acceleration limit of the command
+  int wall_follow_loops = 1;         // loops of the room before modelling (Fig. 18: 5)
 };
 
 class Mission {
@@ -50,6 +52,8 @@ class Mission {
   const std::string& reason() const { return reason_; }
   const WallFollower& wall_follower() const { return follower_; }
   double started_at() const { return started_at_; }
+  // Robot times at which wall-following loops of the room closed.
+  const std::vector<double>& loop_times() const { return loop_times_; }
 
  private:
   void Enter(MissionState s, double t, std::string reason);
@@ -69,6 +73,8 @@ class Mission {
   Pose2 last_pose_;
   double turned_since_anchor_ = 0;  // net heading change while following (+: ccw)
   int objects_left_ = 0;  // free objects circled by mistake and left
+  int loops_done_ = 0;
+  std::vector<double> loop_times_;
   double anchor_distance_ = 0;
   double progress_distance_ = 0;
   double progress_t_ = 0;

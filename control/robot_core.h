@@ -52,6 +52,7 @@ class RobotCore {
   const slam::Slam& slam() const { return slam_; }
   const drivers::MotorClient& motor() const { return motor_; }
   const WheelCommand& last_command() const { return last_cmd_; }
+  const std::vector<double>& loop_times() const { return mission_.loop_times(); }
   const CoreOptions& options() const { return options_; }
 
  private:

@@ -1,5 +1,6 @@
 #include "daemon/config.h"
 
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -23,9 +24,10 @@ class Section {
     }
   }
 
+  // out == nullptr: only marks the key as known (read elsewhere).
   void Num(const char* key, double* out, double lo, double hi) {
     const json* v = Find(key);
-    if (v == nullptr) return;
+    if (v == nullptr || out == nullptr) return;
     if (!v->is_number()) return Fail(key, "must be a number");
     const double d = v->get<double>();
     if (!(d >= lo && d <= hi)) {
@@ -180,7 +182,14 @@ void ReadMission(const json& j, control::CoreOptions* o, std::string* e) {
   s.Num("loop_close_radius_m", &m.loop_close_radius_m, 0.01, 10);
   s.Num("loop_close_angle_rad", &m.loop_close_angle_rad, 0.01, 3.2);
   s.Num("max_accel_mps2", &m.max_accel_mps2, 0.01, 20);
+  s.Int("wall_follow_loops", &m.wall_follow_loops, 1, 100);
   s.Finish();
+}
+
+void ReadBool(const json& j, const char* key, bool* out, Section* s) {
+  if (!j.is_object() || !j.contains(key)) return;
+  if (!j.at(key).is_boolean()) return s->Fail(key, "must be true or false");
+  *out = j.at(key).get<bool>();
 }
 
 void ReadSlam(const json& j, control::CoreOptions* o, std::string* e) {
@@ -189,6 +198,59 @@ void ReadSlam(const json& j, control::CoreOptions* o, std::string* e) {
   s.Num("var_per_m", &o->slam.motion_noise.var_per_m, 0, 1);
   s.Num("var_theta_per_rad", &o->slam.motion_noise.var_theta_per_rad, 0, 1);
   s.Num("var_theta_per_m", &o->slam.motion_noise.var_theta_per_m, 0, 1);
+  static const json kEmpty = json::object();
+  const json* pj = s.Sub("pds");
+  {
+    Section p(pj ? *pj : kEmpty, "slam.pds", e);
+    auto& d = o->slam.pds;
+    p.Num("min_step_m", &d.min_step_m, 0, 1);
+    p.Num("min_turn_rad", &d.min_turn_rad, 0, 1);
+    p.Num("window_m", &d.window_m, 0.05, 10);
+    p.Num("window_rad", &d.window_rad, 0.05, 10);
+    p.Num("max_range_m", &d.max_range_m, 0.1, 10);
+    p.Finish();
+  }
+  const json* xj = s.Sub("extraction");
+  {
+    Section x(xj ? *xj : kEmpty, "slam.extraction", e);
+    auto& d = o->slam.extraction;
+    x.Num("gravity_radius_m", &d.gravity_radius_m, 0, 1);
+    x.Int("gravity_max_points", &d.gravity_max_points, 1, 100);
+    x.Num("cluster_gap_m", &d.cluster_gap_m, 0.005, 2);
+    x.Int("min_points", &d.min_points, 2, 10000);
+    x.Num("min_length_m", &d.min_length_m, 0.01, 10);
+    x.Num("split_threshold_m", &d.split_threshold_m, 0.001, 1);
+    x.Num("max_fit_rms_m", &d.max_fit_rms_m, 0.0001, 1);
+    x.Num("hough_rho_window_m", &d.hough_rho_window_m, 0.001, 1);
+    x.Num("hough_rho_res_m", &d.hough_rho_res_m, 0.0001, 0.5);
+    x.Num("hough_theta_window_rad", &d.hough_theta_window_rad, 0.001, 1);
+    x.Num("hough_theta_res_rad", &d.hough_theta_res_rad, 0.0001, 0.5);
+    x.Num("weight_length", &d.weight_length, 0, 1e6);
+    x.Num("weight_rho", &d.weight_rho, 0, 1e9);
+    x.Num("weight_theta", &d.weight_theta, 0, 1e9);
+    x.Num("max_uncertainty", &d.max_uncertainty, 0, 1e9);
+    x.Finish();
+  }
+  const json* aj = s.Sub("association");
+  {
+    Section a(aj ? *aj : kEmpty, "slam.association", e);
+    auto& d = o->slam.association;
+    a.Num("weight_rho", &d.weight_rho, 0, 1);
+    a.Num("weight_theta", &d.weight_theta, 0, 1);
+    a.Num("max_dh", &d.max_dh, 0, 10);
+    a.Num("angle_tolerance_rad", &d.angle_tolerance_rad, 0, 0.78);
+    a.Num("constraint_sigma_rad", &d.constraint_sigma_rad, 1e-9, 1);
+    a.Num("collinear_sigma_m", &d.collinear_sigma_m, 1e-9, 1);
+    a.Num("measurement_cov_scale", &d.measurement_cov_scale, 1e-6, 1e6);
+    ReadBool(aj ? *aj : kEmpty, "use_constraints", &d.use_constraints, &a);
+    a.Num("use_constraints", nullptr, 0, 0);
+    ReadBool(aj ? *aj : kEmpty, "pin_first_line", &d.pin_first_line, &a);
+    a.Num("pin_first_line", nullptr, 0, 0);
+    a.Finish();
+    if (e->empty() && std::abs(d.weight_rho + d.weight_theta - 1) > 1e-9) {
+      *e = "config: slam.association.weight_rho + weight_theta must be 1";
+    }
+  }
   s.Finish();
 }
 
@@ -245,6 +307,9 @@ std::string DumpConfig(const control::CoreOptions& o) {
   const auto& g = o.slam.geometry;
   const auto& w = o.wall;
   const auto& m = o.mission;
+  const auto& p = o.slam.pds;
+  const auto& x = o.slam.extraction;
+  const auto& a = o.slam.association;
   json j = {
       {"robot", {{"wheel_base_m", g.wheel_base_m}, {"wheel_radius_m", g.wheel_radius_m},
                  {"counts_per_rev", g.counts_per_rev}, {"radius_m", g.radius_m},
@@ -270,11 +335,36 @@ std::string DumpConfig(const control::CoreOptions& o) {
                    {"loop_min_distance_m", m.loop_min_distance_m},
                    {"loop_close_radius_m", m.loop_close_radius_m},
                    {"loop_close_angle_rad", m.loop_close_angle_rad},
-                   {"max_accel_mps2", m.max_accel_mps2}}},
+                   {"max_accel_mps2", m.max_accel_mps2},
+                   {"wall_follow_loops", m.wall_follow_loops}}},
       {"slam", {{"trajectory_period_s", o.slam.trajectory_period_s},
                 {"var_per_m", o.slam.motion_noise.var_per_m},
                 {"var_theta_per_rad", o.slam.motion_noise.var_theta_per_rad},
-                {"var_theta_per_m", o.slam.motion_noise.var_theta_per_m}}},
+                {"var_theta_per_m", o.slam.motion_noise.var_theta_per_m},
+                {"pds", {{"min_step_m", p.min_step_m}, {"min_turn_rad", p.min_turn_rad},
+                         {"window_m", p.window_m}, {"window_rad", p.window_rad},
+                         {"max_range_m", p.max_range_m}}},
+                {"extraction", {{"gravity_radius_m", x.gravity_radius_m},
+                                {"gravity_max_points", x.gravity_max_points},
+                                {"cluster_gap_m", x.cluster_gap_m}, {"min_points", x.min_points},
+                                {"min_length_m", x.min_length_m},
+                                {"split_threshold_m", x.split_threshold_m},
+                                {"max_fit_rms_m", x.max_fit_rms_m},
+                                {"hough_rho_window_m", x.hough_rho_window_m},
+                                {"hough_rho_res_m", x.hough_rho_res_m},
+                                {"hough_theta_window_rad", x.hough_theta_window_rad},
+                                {"hough_theta_res_rad", x.hough_theta_res_rad},
+                                {"weight_length", x.weight_length}, {"weight_rho", x.weight_rho},
+                                {"weight_theta", x.weight_theta},
+                                {"max_uncertainty", x.max_uncertainty}}},
+                {"association", {{"weight_rho", a.weight_rho}, {"weight_theta", a.weight_theta},
+                                 {"max_dh", a.max_dh},
+                                 {"angle_tolerance_rad", a.angle_tolerance_rad},
+                                 {"constraint_sigma_rad", a.constraint_sigma_rad},
+                                 {"collinear_sigma_m", a.collinear_sigma_m},
+                                 {"measurement_cov_scale", a.measurement_cov_scale},
+                                 {"use_constraints", a.use_constraints},
+                                 {"pin_first_line", a.pin_first_line}}}}},
   };
   return j.dump(2);
 }

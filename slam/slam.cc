@@ -24,23 +24,28 @@ Eigen::Vector2d Normal(double theta) { return {std::cos(theta), std::sin(theta)}
 
 Slam::Slam(SlamOptions options) : options_(options), odometry_(options.geometry) {}
 
+double Slam::map_rotation() const {
+  return ekf_.num_lines() > 0 ? NormalizeAngle(M_PI / 2 - ekf_.theta(0)) : 0.0;
+}
+
 Pose2 Slam::ToMap(const Pose2& p) const {
-  const double c = std::cos(map_rotation_), s = std::sin(map_rotation_);
-  return {c * p.x - s * p.y, s * p.x + c * p.y, NormalizeAngle(p.theta + map_rotation_)};
+  const double rot = map_rotation();
+  const double c = std::cos(rot), s = std::sin(rot);
+  return {c * p.x - s * p.y, s * p.x + c * p.y, NormalizeAngle(p.theta + rot)};
 }
 
 Eigen::Matrix3d Slam::map_pose_cov() const {
+  const double rot = map_rotation();
   Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
-  r.topLeftCorner<2, 2>() << std::cos(map_rotation_), -std::sin(map_rotation_),
-      std::sin(map_rotation_), std::cos(map_rotation_);
+  r.topLeftCorner<2, 2>() << std::cos(rot), -std::sin(rot), std::sin(rot), std::cos(rot);
   return r * ekf_.P().topLeftCorner<3, 3>() * r.transpose();
 }
 
 std::vector<LineFeature> Slam::map_lines() const {
   std::vector<LineFeature> out = lines_;
-  const Pose2 rot{0, 0, map_rotation_};
+  const Pose2 rot{0, 0, map_rotation()};
   for (auto& l : out) {
-    l.theta = NormalizeAngle(l.theta + map_rotation_);  // rho is invariant under rotation
+    l.theta = NormalizeAngle(l.theta + rot.theta);  // rho is invariant under rotation
     l.p0 = Transform(rot, l.p0);
     l.p1 = Transform(rot, l.p1);
   }
@@ -189,15 +194,16 @@ int Slam::InsertLine(const ExtractedLine& obs, int collinear_with_index) {
   lines_.push_back(f);
   ++stats_.insertions;
   if (index == 0) {
-    // The first line is a wall and fixes the map's orientation: its angle is
-    // pinned (a near-zero-noise pseudo-measurement), and the map frame is the
-    // internal frame turned so that this wall lies along x (theta_1 = pi/2).
-    Eigen::MatrixXd h = Eigen::MatrixXd::Zero(1, ekf_.x().size());
-    h(0, 4) = 1;
-    Eigen::MatrixXd rr(1, 1);
-    rr(0, 0) = 1e-12;
-    ekf_.Update(Eigen::VectorXd::Zero(1), h, rr);
-    map_rotation_ = NormalizeAngle(M_PI / 2 - ekf_.theta(0));
+    // The first line is a wall and defines the map's orientation: the map frame
+    // is the internal frame turned so that it lies along x (theta_1 = pi/2). The
+    // paper pins its angle (a near-zero-noise pseudo-measurement); optional here.
+    if (options_.association.pin_first_line) {
+      Eigen::MatrixXd h = Eigen::MatrixXd::Zero(1, ekf_.x().size());
+      h(0, 4) = 1;
+      Eigen::MatrixXd rr(1, 1);
+      rr(0, 0) = 1e-12;
+      ekf_.Update(Eigen::VectorXd::Zero(1), h, rr);
+    }
   } else {
     ApplyConstraintsOnly(index);
   }

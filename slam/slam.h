@@ -54,6 +54,11 @@ struct AssociationOptions {
   double collinear_sigma_m = 1e-3;
   double measurement_cov_scale = 1.0; // multiplies the eq. (7) covariance
   bool use_constraints = true;        // off: plain EKF (for comparison, Fig. 17)
+  // The paper pins theta_1 at its first observation. Off (default): line 1 is
+  // estimated like the others (the start pose is known, so the frame is fixed
+  // anyway) and keeps improving; the map frame is still turned so that line 1
+  // lies exactly along x.
+  bool pin_first_line = false;
 };
 
 struct SlamOptions {
@@ -109,8 +114,11 @@ class Slam {
   std::vector<LineFeature> map_lines() const;
   std::vector<TrajectoryPoint> map_trajectory() const;
   Pose2 ToMap(const Pose2& p) const;
+  // Internal -> map frame rotation (pi/2 - theta_1; 0 before the first line).
+  double map_rotation() const;
 
   const std::vector<LineFeature>& lines() const { return lines_; }  // internal frame
+  const std::vector<TrajectoryPoint>& trajectory() const { return trajectory_; }  // internal
   size_t num_lines() const { return lines_.size(); }
   const LineEkf& ekf() const { return ekf_; }
   const Pose2& odometry_pose() const { return odometry_.pose(); }
@@ -143,7 +151,6 @@ class Slam {
   std::vector<TrajectoryPoint> trajectory_;
   SlamStats stats_;
   int next_id_ = 1;
-  double map_rotation_ = 0;  // internal -> map frame
 
   // Pseudo dense scan window (odometry frame).
   Points pds_points_;

@@ -146,8 +146,10 @@ std::optional<World> ParseWorld(std::string_view text, std::string* error) {
     };
     for (const auto& [k, p] : keys) {
       if (!n.contains(k)) continue;
-      if (!n[k].is_number() || n[k].get<double>() < 0) {
-        *error = std::string("world: \"noise.") + k + "\" must be a number >= 0";
+      const bool signed_ok = std::string_view(k).rfind("wheel_radius_error", 0) == 0;
+      if (!n[k].is_number() || n[k].get<double>() < (signed_ok ? -0.5 : 0.0)) {
+        *error = std::string("world: \"noise.") + k + "\" must be a number >= " +
+                 (signed_ok ? "-0.5" : "0");
         return std::nullopt;
       }
       *p = n[k].get<double>();

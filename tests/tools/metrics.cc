@@ -1,0 +1,99 @@
+#include "tests/tools/metrics.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace irslam::metrics {
+namespace {
+
+const TimedPose& Nearest(const std::vector<TimedPose>& v, double t) {
+  auto it = std::lower_bound(v.begin(), v.end(), t,
+                             [](const TimedPose& p, double x) { return p.t < x; });
+  if (it == v.end()) return v.back();
+  if (it != v.begin() && std::abs(std::prev(it)->t - t) < std::abs(it->t - t)) return *std::prev(it);
+  return *it;
+}
+
+}  // namespace
+
+std::vector<TimedPose> ToWorld(const std::vector<slam::TrajectoryPoint>& internal, const Pose2& start) {
+  std::vector<TimedPose> out;
+  out.reserve(internal.size());
+  for (const auto& p : internal) out.push_back({p.t, Compose(start, p.pose)});
+  return out;
+}
+
+double PositionErrorAt(const std::vector<TimedPose>& est, const std::vector<TimedPose>& truth, double t) {
+  const Pose2& a = Nearest(est, t).pose;
+  const Pose2& b = Nearest(truth, t).pose;
+  return std::hypot(a.x - b.x, a.y - b.y);
+}
+
+PoseErrors ComparePoses(const std::vector<TimedPose>& est, const std::vector<TimedPose>& truth) {
+  PoseErrors e;
+  if (est.empty() || truth.empty()) return e;
+  double sp = 0, sh = 0;
+  for (const auto& p : est) {
+    const Pose2& q = Nearest(truth, p.t).pose;
+    const double dp = std::hypot(p.pose.x - q.x, p.pose.y - q.y);
+    const double dh = NormalizeAngle(p.pose.theta - q.theta);
+    sp += dp * dp;
+    sh += dh * dh;
+    e.max_position_m = std::max(e.max_position_m, dp);
+  }
+  e.rms_position_m = std::sqrt(sp / static_cast<double>(est.size()));
+  e.rms_heading_rad = std::sqrt(sh / static_cast<double>(est.size()));
+  const Pose2& a = est.back().pose;
+  const Pose2& b = Nearest(truth, est.back().t).pose;
+  e.final_position_m = std::hypot(a.x - b.x, a.y - b.y);
+  e.final_heading_rad = std::abs(NormalizeAngle(a.theta - b.theta));
+  return e;
+}
+
+std::vector<LineError> CompareLines(const std::vector<slam::LineFeature>& lines, const Pose2& start,
+                                    const sim::World& world, int* unmatched) {
+  std::vector<std::pair<sim::Segment, bool>> truth;
+  for (size_t i = 0; i < world.outline.size(); ++i) {
+    truth.push_back({{world.outline[i], world.outline[(i + 1) % world.outline.size()]}, true});
+  }
+  for (const auto& b : world.objects) {
+    const sim::Vec2 c[4] = {{b.xmin, b.ymin}, {b.xmax, b.ymin}, {b.xmax, b.ymax}, {b.xmin, b.ymax}};
+    for (int k = 0; k < 4; ++k) truth.push_back({{c[k], c[(k + 1) % 4]}, false});
+  }
+  std::vector<LineError> out;
+  int missing = 0;
+  for (const auto& l : lines) {
+    const Pose2 a = Compose(start, {l.p0.x(), l.p0.y(), 0});
+    const Pose2 b = Compose(start, {l.p1.x(), l.p1.y(), 0});
+    const double ang = std::atan2(b.y - a.y, b.x - a.x);
+    const double mx = 0.5 * (a.x + b.x), my = 0.5 * (a.y + b.y);
+    double best = 1e9;
+    LineError be;
+    for (const auto& [s, wall] : truth) {
+      const double ta = std::atan2(s.b.y - s.a.y, s.b.x - s.a.x);
+      double da = std::remainder(ang - ta, M_PI);
+      const double len = std::hypot(s.b.x - s.a.x, s.b.y - s.a.y);
+      const double ux = (s.b.x - s.a.x) / len, uy = (s.b.y - s.a.y) / len;
+      // Distances of the end points from the true (infinite) line.
+      const double d0 = std::abs((a.x - s.a.x) * uy - (a.y - s.a.y) * ux);
+      const double d1 = std::abs((b.x - s.a.x) * uy - (b.y - s.a.y) * ux);
+      const double along = (mx - s.a.x) * ux + (my - s.a.y) * uy;
+      if (std::abs(da) > 6 * M_PI / 180 || 0.5 * (d0 + d1) > 0.15) continue;
+      if (along < -0.3 || along > len + 0.3) continue;
+      const double score = 0.5 * (d0 + d1) + 0.2 * std::abs(da);
+      if (score < best) {
+        best = score;
+        be = {l.id, wall, 0.5 * (d0 + d1), std::abs(da), l.length()};
+      }
+    }
+    if (best < 1e9) {
+      out.push_back(be);
+    } else {
+      ++missing;
+    }
+  }
+  if (unmatched) *unmatched = missing;
+  return out;
+}
+
+}  // namespace irslam::metrics

@@ -1,0 +1,52 @@
+// Accuracy metrics of a simulated mission against the simulator's ground truth:
+// pose errors of the SLAM estimate and of dead reckoning, mapped wall-line errors.
+// The estimate lives in the SLAM's internal frame (the odometry frame of the
+// start); it is put in the world frame through the true start pose, exactly like
+// the truth file's odometry baseline (contracts §5), so both are judged alike.
+#ifndef IRSLAM_TESTS_TOOLS_METRICS_H_
+#define IRSLAM_TESTS_TOOLS_METRICS_H_
+
+#include <string>
+#include <vector>
+
+#include "slam/slam.h"
+#include "tests/sim/world.h"
+
+namespace irslam::metrics {
+
+struct TimedPose {
+  double t;
+  Pose2 pose;
+};
+
+struct PoseErrors {
+  double final_position_m = 0;
+  double final_heading_rad = 0;
+  double rms_position_m = 0;
+  double rms_heading_rad = 0;
+  double max_position_m = 0;
+};
+
+// Errors of `est` against `truth` (both in the world frame), matched by time.
+PoseErrors ComparePoses(const std::vector<TimedPose>& est, const std::vector<TimedPose>& truth);
+// Position error at time t (nearest samples).
+double PositionErrorAt(const std::vector<TimedPose>& est, const std::vector<TimedPose>& truth, double t);
+
+std::vector<TimedPose> ToWorld(const std::vector<slam::TrajectoryPoint>& internal, const Pose2& start);
+
+struct LineError {
+  int id = 0;
+  bool wall = false;         // matched a wall of the room (else a box side)
+  double distance_m = 0;     // mean distance of the mapped end points from the true line
+  double angle_rad = 0;
+  double length_m = 0;
+};
+
+// Matches each mapped line (internal frame) with the true wall or box side it
+// lies along (within 15 cm and 6 deg); unmatched lines are reported as not found.
+std::vector<LineError> CompareLines(const std::vector<slam::LineFeature>& lines, const Pose2& start,
+                                    const sim::World& world, int* unmatched);
+
+}  // namespace irslam::metrics
+
+#endif  // IRSLAM_TESTS_TOOLS_METRICS_H_
