@@ -67,6 +67,10 @@ int Slam::IndexOf(int id) const {
 
 void Slam::AddWheelTicks(const WheelTicks& ticks) {
   const std::optional<Motion> m = odometry_.Add(ticks);
+  odom_history_.emplace_back(ticks.t, odometry_.pose());
+  while (odom_history_.size() > 2 && odom_history_.front().first < ticks.t - 0.5) {
+    odom_history_.pop_front();
+  }
   if (!m) {
     trajectory_.push_back({ticks.t, ekf_.pose()});
     return;
@@ -75,10 +79,42 @@ void Slam::AddWheelTicks(const WheelTicks& ticks) {
   if (trajectory_.empty() || ticks.t - trajectory_.back().t >= options_.trajectory_period_s) {
     trajectory_.push_back({ticks.t, ekf_.pose()});
   }
+  // Scans stamped up to now can be placed on the odometry path.
+  while (!pending_scans_.empty() && pending_scans_.front().t <= ticks.t) {
+    const RangeScan scan = pending_scans_.front();
+    pending_scans_.pop_front();
+    AddScanAt(scan, OdometryAt(scan.t));
+  }
+}
+
+Pose2 Slam::OdometryAt(double t) const {
+  if (odom_history_.empty()) return odometry_.pose();
+  if (t <= odom_history_.front().first) return odom_history_.front().second;
+  for (size_t i = 1; i < odom_history_.size(); ++i) {
+    const auto& [t1, p1] = odom_history_[i];
+    if (t <= t1) {
+      const auto& [t0, p0] = odom_history_[i - 1];
+      const double f = t1 > t0 ? (t - t0) / (t1 - t0) : 1.0;
+      return {p0.x + f * (p1.x - p0.x), p0.y + f * (p1.y - p0.y),
+              NormalizeAngle(p0.theta + f * NormalizeAngle(p1.theta - p0.theta))};
+    }
+  }
+  return odom_history_.back().second;
 }
 
 void Slam::AddRangeScan(const RangeScan& scan) {
-  const Pose2& o = odometry_.pose();
+  // The IR sample is usually stamped a few ms after the last encoder frame: wait
+  // for the odometry to get there, so each point is placed from the pose it was
+  // measured at (at 0.8 rad/s, 10 ms of lag would bend a PDS line by ~0.5 deg).
+  if (scan.t <= odometry_.last_t() && !odom_history_.empty()) {
+    AddScanAt(scan, OdometryAt(scan.t));
+  } else {
+    pending_scans_.push_back(scan);
+    while (pending_scans_.size() > 16) pending_scans_.pop_front();
+  }
+}
+
+void Slam::AddScanAt(const RangeScan& scan, const Pose2& o) {
   if (have_last_scan_pose_) {
     const double moved = std::hypot(o.x - last_scan_pose_.x, o.y - last_scan_pose_.y);
     const double turned = std::abs(NormalizeAngle(o.theta - last_scan_pose_.theta));
@@ -104,6 +140,7 @@ void Slam::AddRangeScan(const RangeScan& scan) {
 
 void Slam::CloseWindow() {
   ++stats_.windows;
+
   // Express the window in the robot frame now, so lines come out as observations.
   const Pose2& o = odometry_.pose();
   Points pts;

@@ -21,6 +21,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <deque>
 #include <vector>
 
 #include "slam/line_ekf.h"
@@ -42,7 +43,7 @@ struct PdsOptions {
   double min_turn_rad = 0.03;   // ... or this much rotation
   double window_m = 0.6;        // the window closes after this distance ...
   double window_rad = 0.9;      // ... or this rotation
-  double max_range_m = 1.0;     // readings beyond this are not used for mapping
+  double max_range_m = 0.8;     // readings beyond this are not used for mapping (noise grows ~d^2)
 };
 
 struct AssociationOptions {
@@ -132,6 +133,9 @@ class Slam {
   void ProcessLines(const std::vector<ExtractedLine>& lines);
 
  private:
+  void AddScanAt(const RangeScan& scan, const Pose2& odom_pose);
+  // Odometry pose at time t, interpolated in the recent history.
+  Pose2 OdometryAt(double t) const;
   void CloseWindow();
   void Associate(const ExtractedLine& obs);
   int InsertLine(const ExtractedLine& obs, int collinear_with_index);
@@ -151,6 +155,11 @@ class Slam {
   std::vector<TrajectoryPoint> trajectory_;
   SlamStats stats_;
   int next_id_ = 1;
+
+  // Recent odometry poses (for scans stamped between encoder frames) and scans
+  // waiting for the odometry to reach their time.
+  std::deque<std::pair<double, Pose2>> odom_history_;
+  std::deque<RangeScan> pending_scans_;
 
   // Pseudo dense scan window (odometry frame).
   Points pds_points_;

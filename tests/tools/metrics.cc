@@ -83,7 +83,10 @@ std::vector<LineError> CompareLines(const std::vector<slam::LineFeature>& lines,
       const double score = 0.5 * (d0 + d1) + 0.2 * std::abs(da);
       if (score < best) {
         best = score;
-        be = {l.id, wall, 0.5 * (d0 + d1), std::abs(da), l.length()};
+        const bool vertical = std::abs(ux) < 0.5;
+        // Signed offset of the mapped midpoint along +x (vertical) or +y (horizontal).
+        const double off = vertical ? mx - s.a.x : my - s.a.y;
+        be = {l.id, da, off, vertical, wall, 0.5 * (d0 + d1), std::abs(da), l.length()};
       }
     }
     if (best < 1e9) {
@@ -94,6 +97,38 @@ std::vector<LineError> CompareLines(const std::vector<slam::LineFeature>& lines,
   }
   if (unmatched) *unmatched = missing;
   return out;
+}
+
+Pose2 BestAlignment(const std::vector<slam::LineFeature>& lines, const Pose2& start,
+                    const sim::World& world) {
+  // Rotation: the length-weighted mean angle error; then translation: the mean
+  // offsets of vertical lines (x) and horizontal lines (y), after that rotation.
+  int unmatched;
+  std::vector<LineError> e = CompareLines(lines, start, world, &unmatched);
+  double sw = 0, sa = 0;
+  for (const auto& l : e) {
+    sw += l.length_m;
+    sa += l.length_m * l.signed_angle_rad;
+  }
+  if (sw <= 0) return {};
+  const double rot = -sa / sw;
+  e = CompareLines(lines, CorrectStart(start, {0, 0, rot}), world, &unmatched);
+  double wx = 0, sx = 0, wy = 0, sy = 0;
+  for (const auto& l : e) {
+    if (l.vertical) {
+      wx += l.length_m;
+      sx += l.length_m * l.signed_offset_m;
+    } else {
+      wy += l.length_m;
+      sy += l.length_m * l.signed_offset_m;
+    }
+  }
+  return {wx > 0 ? -sx / wx : 0.0, wy > 0 ? -sy / wy : 0.0, rot};
+}
+
+Pose2 CorrectStart(const Pose2& start, const Pose2& c) {
+  // Rotate about the start position, then shift.
+  return {start.x + c.x, start.y + c.y, NormalizeAngle(start.theta + c.theta)};
 }
 
 }  // namespace irslam::metrics

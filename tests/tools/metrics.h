@@ -36,6 +36,9 @@ std::vector<TimedPose> ToWorld(const std::vector<slam::TrajectoryPoint>& interna
 
 struct LineError {
   int id = 0;
+  double signed_angle_rad = 0;   // mapped - true
+  double signed_offset_m = 0;    // mean signed offset along the true wall's normal (+x or +y)
+  bool vertical = false;         // the true segment is parallel to y
   bool wall = false;         // matched a wall of the room (else a box side)
   double distance_m = 0;     // mean distance of the mapped end points from the true line
   double angle_rad = 0;
@@ -46,6 +49,14 @@ struct LineError {
 // lies along (within 15 cm and 6 deg); unmatched lines are reported as not found.
 std::vector<LineError> CompareLines(const std::vector<slam::LineFeature>& lines, const Pose2& start,
                                     const sim::World& world, int* unmatched);
+
+// The rigid correction (about the start position) that best aligns the mapped
+// lines with the true ones they were matched to: the map frame is arbitrary (it is
+// defined by the first wall), so the map's own geometry is judged after it.
+Pose2 BestAlignment(const std::vector<slam::LineFeature>& lines, const Pose2& start,
+                    const sim::World& world);
+// Applies a correction from BestAlignment to the start pose used for comparisons.
+Pose2 CorrectStart(const Pose2& start, const Pose2& correction);
 
 }  // namespace irslam::metrics
 
