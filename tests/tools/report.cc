@@ -238,7 +238,7 @@ int main(int argc, char** argv) {
     }
     Write(out_dir + "/fig17_covariance.svg",
           LineChart("Fig. 17: covariance convergence with and without constraints (seed 1)",
-                    "robot time [s]", "sigma [deg]", curves, true));
+                    "robot time [s]", "sigma [deg]", curves, false));
     md << "\n![covariance convergence](fig17_covariance.svg)\n\n";
   }
 

@@ -9,7 +9,7 @@ namespace irslam::report {
 
 std::string LineChart(const std::string& title, const std::string& xlabel, const std::string& ylabel,
                       const std::vector<Series>& series, bool log_y) {
-  const double W = 760, H = 420, L = 70, R = 180, T = 40, B = 50;
+  const double W = 900, H = 420, L = 70, R = 300, T = 40, B = 50;
   double x0 = 1e18, x1 = -1e18, y0 = 1e18, y1 = -1e18;
   const auto fy = [&](double y) { return log_y ? std::log10(std::max(y, 1e-12)) : y; };
   for (const auto& s : series) {
