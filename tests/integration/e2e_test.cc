@@ -185,28 +185,39 @@ TEST_F(E2eTest, StopHaltsTheWheelsWithinOnePeriod) {
   RpcClient c;
   std::string error;
   ASSERT_TRUE(c.Connect(socket_, &error));
-  tap.Clear();
   ASSERT_TRUE(c.Call("stop", nlohmann::json::object(), 5, &error)) << error;
   const auto replied = Clock::now();
   Sleep(0.3);
-  const double period_wall = 0.02 / kScale;
-  bool saw_zero_in_time = false;
-  int enabled_after = 0, status_ready = 0;
+  // The command stream around the request, in bus order: the first disabled
+  // command must directly follow the last enabled one (consecutive sequence
+  // numbers: no control period passed in between) and nothing enabled may follow.
+  std::vector<std::pair<proto::WheelCommand, Clock::time_point>> cmds;
+  int status_ready = 0;
   for (const auto& s : tap.Frames()) {
     const auto d = proto::Decode(s.frame);
     if (!d.ok()) continue;
-    if (const auto* cmd = std::get_if<proto::WheelCommand>(&d.message)) {
-      if (!cmd->enable && cmd->left_mps == 0 && cmd->right_mps == 0 &&
-          s.at <= replied + std::chrono::duration<double>(period_wall)) {
-        saw_zero_in_time = true;
-      }
-      if (cmd->enable && s.at > replied) ++enabled_after;
-    }
+    if (const auto* cmd = std::get_if<proto::WheelCommand>(&d.message)) cmds.emplace_back(*cmd, s.at);
     if (const auto* st = std::get_if<proto::ControllerStatus>(&d.message)) {
       status_ready += st->state == proto::ControllerState::kReady && s.at > replied;
     }
   }
-  EXPECT_TRUE(saw_zero_in_time);
+  size_t first_off = cmds.size();
+  bool driving = false;
+  for (size_t i = 0; i < cmds.size(); ++i) {
+    driving |= cmds[i].first.enable;
+    if (driving && !cmds[i].first.enable) {
+      first_off = i;
+      break;
+    }
+  }
+  ASSERT_LT(first_off, cmds.size()) << "no stop command on the bus";
+  ASSERT_GT(first_off, 0u) << "the robot was not driving before the stop";
+  EXPECT_EQ(static_cast<uint8_t>(cmds[first_off - 1].first.seq + 1), cmds[first_off].first.seq);
+  EXPECT_EQ(cmds[first_off].first.left_mps, 0.0);
+  EXPECT_EQ(cmds[first_off].first.right_mps, 0.0);
+  EXPECT_LE(cmds[first_off].second, replied + std::chrono::milliseconds(50));
+  int enabled_after = 0;
+  for (size_t i = first_off; i < cmds.size(); ++i) enabled_after += cmds[i].first.enable;
   EXPECT_EQ(enabled_after, 0);
   EXPECT_GT(status_ready, 0) << "the controller never reported the wheels stopped";
   auto s = Status();

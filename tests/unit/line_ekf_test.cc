@@ -1,0 +1,217 @@
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <random>
+
+#include "slam/line_ekf.h"
+#include "slam/slam.h"
+
+namespace irslam::slam {
+namespace {
+
+Eigen::Matrix<double, 2, 5> NumericJacobian(const Pose2& r, double rho, double theta) {
+  const double h = 1e-7;
+  Eigen::Matrix<double, 2, 5> j;
+  const LineObservation z0 = PredictObservation(r, rho, theta, nullptr);
+  for (int k = 0; k < 5; ++k) {
+    Pose2 q = r;
+    double rr = rho, tt = theta;
+    if (k == 0) q.x += h;
+    if (k == 1) q.y += h;
+    if (k == 2) q.theta += h;
+    if (k == 3) rr += h;
+    if (k == 4) tt += h;
+    const LineObservation z = PredictObservation(q, rr, tt, nullptr);
+    j(0, k) = (z.rho - z0.rho) / h;
+    j(1, k) = NormalizeAngle(z.theta - z0.theta) / h;
+  }
+  return j;
+}
+
+TEST(LineEkfTest, MeasurementJacobianMatchesFiniteDifferences) {
+  // Robot on the origin's side of the line (d > 0) and on the other side (d < 0).
+  const std::tuple<Pose2, double, double> cases[] = {
+      {{0.3, -0.2, 0.4}, 2.0, 0.7}, {{3.0, 2.5, -1.0}, 1.0, 0.7}, {{-1, 0.5, 2.9}, 0.4, -2.5}};
+  for (const auto& [r, rho, theta] : cases) {
+    Eigen::Matrix<double, 2, 5> j;
+    PredictObservation(r, rho, theta, &j);
+    EXPECT_TRUE(j.isApprox(NumericJacobian(r, rho, theta), 1e-5)) << j << "\n"
+                                                                   << NumericJacobian(r, rho, theta);
+  }
+}
+
+TEST(LineEkfTest, OtherSideOfTheLineFlipsTheObservation) {
+  // The wall x = 1 seen from x = 2 facing +x: it is 1 m behind, normal pointing back.
+  const LineObservation z = PredictObservation({2, 0, 0}, 1.0, 0.0, nullptr);
+  EXPECT_NEAR(z.rho, 1.0, 1e-12);
+  EXPECT_NEAR(std::abs(z.theta), M_PI, 1e-12);
+}
+
+TEST(LineEkfTest, InverseModelRoundTripsAndItsJacobiansMatch) {
+  const Pose2 r{0.7, -0.4, 1.1};
+  const LineObservation z{0.45, -0.9};
+  double rho, theta;
+  Eigen::Matrix<double, 2, 3> gp;
+  Eigen::Matrix2d gz;
+  ObservationToMap(r, z, &rho, &theta, &gp, &gz);
+  const LineObservation back = PredictObservation(r, rho, theta, nullptr);
+  EXPECT_NEAR(back.rho, z.rho, 1e-12);
+  EXPECT_NEAR(NormalizeAngle(back.theta - z.theta), 0, 1e-12);
+  const double h = 1e-7;
+  for (int k = 0; k < 3; ++k) {
+    Pose2 q = r;
+    (k == 0 ? q.x : k == 1 ? q.y : q.theta) += h;
+    double r2, t2;
+    ObservationToMap(q, z, &r2, &t2, nullptr, nullptr);
+    EXPECT_NEAR((r2 - rho) / h, gp(0, k), 1e-5);
+    EXPECT_NEAR(NormalizeAngle(t2 - theta) / h, gp(1, k), 1e-5);
+  }
+  for (int k = 0; k < 2; ++k) {
+    LineObservation q = z;
+    (k == 0 ? q.rho : q.theta) += h;
+    double r2, t2;
+    ObservationToMap(r, q, &r2, &t2, nullptr, nullptr);
+    EXPECT_NEAR((r2 - rho) / h, gz(0, k), 1e-5);
+    EXPECT_NEAR(NormalizeAngle(t2 - theta) / h, gz(1, k), 1e-5);
+  }
+}
+
+TEST(LineEkfTest, AngleModHalfPiTreatsParallelAndOrthogonalAlike) {
+  EXPECT_NEAR(AngleModHalfPi(0.02), 0.02, 1e-12);
+  EXPECT_NEAR(AngleModHalfPi(M_PI / 2 + 0.02), 0.02, 1e-12);
+  EXPECT_NEAR(AngleModHalfPi(M_PI - 0.02), -0.02, 1e-12);
+  EXPECT_NEAR(AngleModHalfPi(-M_PI / 2 - 0.03), -0.03, 1e-12);
+  EXPECT_NEAR(std::abs(AngleModHalfPi(M_PI / 4)), M_PI / 4, 1e-12);
+}
+
+TEST(LineEkfTest, RemoveLineDeletesExactlyItsRowsAndColumns) {
+  LineEkf ekf;
+  Eigen::Matrix2d r = Eigen::Matrix2d::Identity() * 1e-4;
+  ekf.AddLine({1.0, 0.1}, r);
+  ekf.AddLine({2.0, 0.2}, r);
+  ekf.AddLine({3.0, 0.3}, r);
+  Eigen::MatrixXd& p = ekf.mutable_P();
+  for (int i = 0; i < 9; ++i) {
+    for (int j = 0; j < 9; ++j) p(i, j) = 100 * i + j;
+  }
+  ekf.RemoveLine(1);
+  ASSERT_EQ(ekf.x().size(), 7);
+  EXPECT_DOUBLE_EQ(ekf.rho(0), 1.0);
+  EXPECT_DOUBLE_EQ(ekf.rho(1), 3.0);
+  EXPECT_DOUBLE_EQ(ekf.P()(5, 5), 100 * 7 + 7);  // old (7,7)
+  EXPECT_DOUBLE_EQ(ekf.P()(3, 6), 100 * 3 + 8);  // old (3,8)
+  EXPECT_DOUBLE_EQ(ekf.P()(6, 0), 100 * 8 + 0);
+}
+
+SlamOptions TestOptions() {
+  SlamOptions o;
+  o.association.use_constraints = true;
+  return o;
+}
+
+ExtractedLine Obs(double rho, double theta, double s0, double s1) {
+  ExtractedLine l;
+  l.rho = rho;
+  l.theta = theta;
+  l.cov << 1e-4, 0, 0, 1e-3;
+  const Eigen::Vector2d n(std::cos(theta), std::sin(theta)), d(-std::sin(theta), std::cos(theta));
+  l.p0 = rho * n + s0 * d;
+  l.p1 = rho * n + s1 * d;
+  l.length = s1 - s0;
+  return l;
+}
+
+// Symmetric, positive semi-definite as a whole (the robot block is exactly zero
+// here: the robot never moved) and positive definite over the map lines.
+bool SymmetricPositiveDefinite(const Eigen::MatrixXd& p) {
+  const long n = p.rows() - 3;
+  const Eigen::MatrixXd lines = p.bottomRightCorner(n, n);
+  return (p - p.transpose()).cwiseAbs().maxCoeff() < 1e-12 &&
+         Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(p).eigenvalues().minCoeff() > -1e-12 &&
+         lines.llt().info() == Eigen::Success;
+}
+
+TEST(SlamMapTest, ConstraintSnapsANearOrthogonalLineToExactlyOrthogonal) {
+  Slam slam(TestOptions());
+  slam.ProcessLines({Obs(0.4, -M_PI / 2, -0.5, 0.5)});
+  slam.ProcessLines({Obs(1.0, 0.06, -0.3, 0.3)});  // 3.4 deg off orthogonal
+  ASSERT_EQ(slam.num_lines(), 2u);
+  const double off = AngleModHalfPi(slam.ekf().theta(1) - slam.ekf().theta(0));
+  EXPECT_LT(std::abs(off), 2e-4);
+  // Without constraints the same observations keep their 3.4 degrees.
+  SlamOptions plain = TestOptions();
+  plain.association.use_constraints = false;
+  Slam free(plain);
+  free.ProcessLines({Obs(0.4, -M_PI / 2, -0.5, 0.5)});
+  free.ProcessLines({Obs(1.0, 0.06, -0.3, 0.3)});
+  EXPECT_NEAR(AngleModHalfPi(free.ekf().theta(1) - free.ekf().theta(0)), 0.06, 1e-9);
+}
+
+TEST(SlamMapTest, LinesNeitherParallelNorOrthogonalAreNotMapped) {
+  Slam slam(TestOptions());
+  slam.ProcessLines({Obs(0.4, -M_PI / 2, -0.5, 0.5)});
+  slam.ProcessLines({Obs(1.0, 0.6, -0.3, 0.3)});  // 34 deg
+  EXPECT_EQ(slam.num_lines(), 1u);
+  EXPECT_EQ(slam.stats().rejected_angle, 1);
+}
+
+TEST(SlamMapTest, SeeingALineAgainUpdatesAndExtendsIt) {
+  Slam slam(TestOptions());
+  slam.ProcessLines({Obs(0.4, -M_PI / 2, -0.5, 0.3)});
+  slam.ProcessLines({Obs(0.41, -M_PI / 2, 0.0, 0.9)});
+  ASSERT_EQ(slam.num_lines(), 1u);
+  EXPECT_EQ(slam.stats().updates, 1);
+  EXPECT_NEAR(slam.lines()[0].length(), 1.4, 0.02);
+  EXPECT_EQ(slam.lines()[0].observations, 2);
+  EXPECT_TRUE(SymmetricPositiveDefinite(slam.ekf().P()));
+}
+
+TEST(SlamMapTest, CollinearPieceIsInsertedThenMergedWhenItOverlaps) {
+  Slam slam(TestOptions());
+  slam.ProcessLines({Obs(0.4, -M_PI / 2, -0.5, 0.0)});  // id 1
+  slam.ProcessLines({Obs(1.2, 0.0, -0.5, 0.3)});        // id 2, orthogonal
+  slam.ProcessLines({Obs(0.42, -M_PI / 2, 0.5, 1.0)});  // collinear with 1, gap of 0.5 m: id 3
+  ASSERT_EQ(slam.num_lines(), 3u);
+  EXPECT_EQ(slam.stats().collinear_insertions, 1);
+  EXPECT_EQ(slam.lines()[2].collinear_with, 1);
+  // Eq. (12) tied them together.
+  EXPECT_NEAR(slam.ekf().rho(2), slam.ekf().rho(0), 2e-3);
+  // The piece grows over the gap: it overlaps line 1 and is merged into it.
+  slam.ProcessLines({Obs(0.42, -M_PI / 2, -0.2, 0.8)});
+  ASSERT_EQ(slam.num_lines(), 2u);
+  EXPECT_EQ(slam.stats().merges, 1);
+  EXPECT_EQ(slam.stats().loop_closures, 1);  // merged into the first line
+  EXPECT_EQ(slam.lines()[0].id, 1);           // the older id survives
+  EXPECT_EQ(slam.lines()[1].id, 2);
+  EXPECT_EQ(slam.ekf().x().size(), 3 + 2 * 2);
+  EXPECT_NEAR(slam.lines()[0].length(), 1.5, 0.03);
+  EXPECT_TRUE(SymmetricPositiveDefinite(slam.ekf().P()));
+}
+
+TEST(SlamMapTest, MapFrameHasTheFirstWallAlongX) {
+  Slam slam(TestOptions());
+  slam.ProcessLines({Obs(0.4, -0.3, -0.5, 0.5)});
+  const auto lines = slam.map_lines();
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_NEAR(lines[0].theta, M_PI / 2, 1e-12);
+  EXPECT_NEAR(lines[0].p0.y(), lines[0].p1.y(), 1e-9);  // horizontal in the map frame
+  EXPECT_NEAR(slam.map_pose().theta, NormalizeAngle(M_PI / 2 + 0.3), 1e-12);
+}
+
+TEST(SlamMapTest, JosephUpdatesKeepTheCovarianceSymmetricPositiveDefinite) {
+  Slam slam(TestOptions());
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0, 0.005);
+  slam.ProcessLines({Obs(0.4, -M_PI / 2, -0.5, 0.5), Obs(1.5, 0.0, -0.4, 0.4)});
+  for (int i = 0; i < 200; ++i) {
+    slam.ProcessLines({Obs(0.4 + n(rng), -M_PI / 2 + n(rng), -0.5, 0.5),
+                       Obs(1.5 + n(rng), n(rng), -0.4, 0.4)});
+  }
+  EXPECT_EQ(slam.num_lines(), 2u);
+  EXPECT_TRUE(SymmetricPositiveDefinite(slam.ekf().P()));
+  EXPECT_LT(std::sqrt(slam.ekf().LineCov(1)(0, 0)), 0.01);
+}
+
+}  // namespace
+}  // namespace irslam::slam
