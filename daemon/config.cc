@@ -242,6 +242,7 @@ void ReadSlam(const json& j, control::CoreOptions* o, std::string* e) {
     a.Num("constraint_sigma_rad", &d.constraint_sigma_rad, 1e-9, 1);
     a.Num("collinear_sigma_m", &d.collinear_sigma_m, 1e-9, 1);
     a.Num("measurement_cov_scale", &d.measurement_cov_scale, 1e-6, 1e6);
+    a.Num("max_mahalanobis2", &d.max_mahalanobis2, 0.1, 1e9);
     ReadBool(aj ? *aj : kEmpty, "use_constraints", &d.use_constraints, &a);
     a.Num("use_constraints", nullptr, 0, 0);
     ReadBool(aj ? *aj : kEmpty, "pin_first_line", &d.pin_first_line, &a);
@@ -363,6 +364,7 @@ std::string DumpConfig(const control::CoreOptions& o) {
                                  {"constraint_sigma_rad", a.constraint_sigma_rad},
                                  {"collinear_sigma_m", a.collinear_sigma_m},
                                  {"measurement_cov_scale", a.measurement_cov_scale},
+                                 {"max_mahalanobis2", a.max_mahalanobis2},
                                  {"use_constraints", a.use_constraints},
                                  {"pin_first_line", a.pin_first_line}}}}},
   };

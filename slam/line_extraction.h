@@ -30,10 +30,11 @@ struct ExtractionOptions {
   double hough_theta_window_rad = 5 * M_PI / 180;  // +-5 deg ...
   double hough_theta_res_rad = 1 * M_PI / 180;     // ... at 1 deg
   // Eq. (8) weights (Appendix 1; `irslam-weights` computes them from recorded lines)
-  double weight_length = 0.05;      // wl  [m]
-  double weight_rho = 2000;         // wrho [1/m^2]
-  double weight_theta = 400;        // wtheta [1/rad^2]
-  double max_uncertainty = 3.0;     // lines with U above this are dropped
+  // (defaults: irslam-weights over the Fig. 14 room, seeds 1-3, docs/accuracy.md)
+  double weight_length = 0.487;     // wl  [m]
+  double weight_rho = 1459;         // wrho [1/m^2]
+  double weight_theta = 791;        // wtheta [1/rad^2]
+  double max_uncertainty = 4.5;     // lines with U above this are dropped
 };
 
 struct LineFit {

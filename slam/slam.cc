@@ -1,5 +1,6 @@
 #include "slam/slam.h"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 
@@ -151,6 +152,7 @@ void Slam::CloseWindow() {
   if (!pds_positions_.empty()) centre /= static_cast<double>(pds_positions_.size());
   const std::vector<ExtractedLine> lines = ExtractLines(pts, centre, options_.extraction);
   stats_.lines_extracted += static_cast<int>(lines.size());
+  last_window_lines_ = lines;
   pds_points_.clear();
   pds_positions_.clear();
   window_distance_ = 0;
@@ -329,6 +331,19 @@ void Slam::Associate(const ExtractedLine& obs) {
   }
   y.push_back(obs.rho - zhat.rho);
   y.push_back(NormalizeAngle(obs.theta - zhat.theta));
+  {
+    // Innovation gate: a DH match that the covariance cannot explain is not used
+    // (a wrong association would pull the whole map).
+    Eigen::MatrixXd hm(2, n);
+    hm.row(0) = rows[0];
+    hm.row(1) = rows[1];
+    const Eigen::Matrix2d s = hm * ekf_.P() * hm.transpose() + obs.cov * ao.measurement_cov_scale;
+    const Eigen::Vector2d yy(y[0], y[1]);
+    if (yy.dot(s.inverse() * yy) > ao.max_mahalanobis2) {
+      ++stats_.rejected_gate;
+      return;
+    }
+  }
   AppendConstraintRows(best, &rows, &y, &r);
   const long m = static_cast<long>(rows.size());
   Eigen::MatrixXd h(m, n);

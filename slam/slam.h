@@ -54,6 +54,7 @@ struct AssociationOptions {
   double constraint_sigma_rad = 1e-3; // pseudo-measurement noise, eqs. (11)-(12)
   double collinear_sigma_m = 1e-3;
   double measurement_cov_scale = 1.0; // multiplies the eq. (7) covariance
+  double max_mahalanobis2 = 13.8;     // innovation gate of a match (chi2, 2 dof, 99.9 %)
   bool use_constraints = true;        // off: plain EKF (for comparison, Fig. 17)
   // The paper pins theta_1 at its first observation. Off (default): line 1 is
   // estimated like the others (the start pose is known, so the frame is fixed
@@ -96,6 +97,7 @@ struct SlamStats {
   int insertions = 0;
   int collinear_insertions = 0;
   int rejected_angle = 0;   // neither parallel nor orthogonal to line 1
+  int rejected_gate = 0;    // matched by DH but inconsistent with the covariance
   int merges = 0;
   int loop_closures = 0;    // merges into the first line
 };
@@ -126,6 +128,9 @@ class Slam {
   double distance_m() const { return odometry_.distance_m(); }
   double time() const { return odometry_.last_t(); }
   const SlamStats& stats() const { return stats_; }
+  // The lines extracted from the last closed PDS window (robot frame), e.g. for
+  // recording observations for the Appendix 1 weights.
+  const std::vector<ExtractedLine>& last_window_lines() const { return last_window_lines_; }
   const SlamOptions& options() const { return options_; }
 
   // Feeds one window's extracted lines (robot frame) to the map; public so tests
@@ -154,6 +159,7 @@ class Slam {
   std::vector<LineFeature> lines_;  // lines_[i] is state line i
   std::vector<TrajectoryPoint> trajectory_;
   SlamStats stats_;
+  std::vector<ExtractedLine> last_window_lines_;
   int next_id_ = 1;
 
   // Recent odometry poses (for scans stamped between encoder frames) and scans

@@ -68,12 +68,35 @@ bool Load(const Common& c, World* world, control::CoreOptions* core, uint64_t* s
   return true;
 }
 
-int Run(const Common& c, double max_time, const std::string& map_out, const std::string& svg_out) {
+int Run(const Common& c, double max_time, const std::string& map_out, const std::string& svg_out,
+        const std::string& lines_out) {
   World world;
   control::CoreOptions core_opts;
   uint64_t seed;
   if (!Load(c, &world, &core_opts, &seed)) return kExitUsage;
-  InProcessRun run = RunInProcess(world, core_opts, seed, max_time);
+  // Optionally record every extracted line observation (irslam-weights reads them).
+  std::ofstream lines_file;
+  if (!lines_out.empty()) {
+    lines_file.open(lines_out);
+    if (!lines_file) {
+      std::fprintf(stderr, "irslam-sim: cannot write %s\n", lines_out.c_str());
+      return 1;
+    }
+  }
+  int windows_seen = 0;
+  auto record = [&](const InProcessRun& r) {
+    const auto& s = r.core->slam();
+    if (!lines_file.is_open() || s.stats().windows == windows_seen) return;
+    windows_seen = s.stats().windows;
+    for (const auto& l : s.last_window_lines()) {
+      lines_file << nlohmann::json{{"t", r.t}, {"rho", l.rho}, {"theta", l.theta},
+                                   {"length", l.length}, {"c_rho_rho", l.cov(0, 0)},
+                                   {"c_theta_theta", l.cov(1, 1)}, {"points", l.points}}
+                        .dump()
+                 << "\n";
+    }
+  };
+  InProcessRun run = RunInProcess(world, core_opts, seed, max_time, record);
   if (!run.error.empty()) {
     std::fprintf(stderr, "irslam-sim: cannot start the mission: %s\n", run.error.c_str());
     return 1;
@@ -188,8 +211,10 @@ int main(int argc, char** argv) {
   std::string map_out;
   run->add_option("--max-time", max_time, "Robot-time limit in seconds")->check(CLI::PositiveNumber);
   run->add_option("--map-out", map_out, "Write the map here (contracts §4)");
-  std::string svg_out;
+  std::string svg_out, lines_out;
   run->add_option("--svg", svg_out, "Draw the map, the true room and trajectories as SVG");
+  run->add_option("--lines-out", lines_out,
+                  "Record every extracted line observation (JSON lines; input of irslam-weights)");
 
   auto* serve = app.add_subcommand("serve", "Be the motor controller on a CAN bus");
   add_common(serve);
@@ -203,6 +228,6 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-  if (*run) return irslam::sim::Run(common, max_time, map_out, svg_out);
+  if (*run) return irslam::sim::Run(common, max_time, map_out, svg_out, lines_out);
   return irslam::sim::Serve(common, iface, time_scale);
 }

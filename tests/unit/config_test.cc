@@ -10,8 +10,12 @@ TEST(ConfigTest, ShippedFileEqualsTheBuiltInDefaults) {
   control::CoreOptions o = control::DefaultCoreOptions();
   std::string error;
   ASSERT_TRUE(LoadConfigFile(IRSLAM_SOURCE_DIR "/daemon/irslamd.conf", &o, &error)) << error;
-  // Sensor mounts in the file are rounded to 1e-7.
+  // Sensor mounts and Hough angles in the file are rounded to 1e-7.
   const auto d = control::DefaultCoreOptions();
+  EXPECT_NEAR(o.slam.extraction.hough_theta_res_rad, d.slam.extraction.hough_theta_res_rad, 1e-7);
+  EXPECT_NEAR(o.slam.extraction.hough_theta_window_rad, d.slam.extraction.hough_theta_window_rad, 1e-7);
+  o.slam.extraction.hough_theta_res_rad = d.slam.extraction.hough_theta_res_rad;
+  o.slam.extraction.hough_theta_window_rad = d.slam.extraction.hough_theta_window_rad;
   for (int i = 0; i < kNumIrSensors; ++i) {
     EXPECT_NEAR(o.slam.mounts[i].theta, d.slam.mounts[i].theta, 1e-6);
     EXPECT_NEAR(o.slam.mounts[i].x, d.slam.mounts[i].x, 1e-6);
