@@ -18,13 +18,19 @@ const char* ToString(MissionState s) {
   return "?";
 }
 
-Mission::Mission(MissionOptions options, WallFollowerOptions wall, const slam::SlamOptions& slam)
+Mission::Mission(MissionOptions options, WallFollowerOptions wall, ExploreOptions explore,
+                 ModelOptions model, const slam::SlamOptions& slam)
     : options_(options),
+      explore_(explore),
       geometry_(slam.geometry),
-      follower_(wall, slam.mounts, slam.geometry.radius_m) {}
+      mounts_(slam.mounts),
+      follow_distance_m_(wall.follow_distance_m),
+      follower_(wall, slam.mounts, slam.geometry.radius_m),
+      modeler_(model) {}
 
 void Mission::Enter(MissionState s, double t, std::string reason) {
   state_ = s;
+  state_since_ = t;
   reason_ = std::move(reason);
   if (s == MissionState::kWallFollow) {
     follower_.Reset();
@@ -116,7 +122,17 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
     return {};
   }
 
-  if (state_ == MissionState::kWallFollow) {
+  switch (state_) {
+    case MissionState::kWallFollow: return StepWallFollow(t, dt, slam, scan, bumped);
+    case MissionState::kModel: return StepModel(t, slam);
+    case MissionState::kGoToP1: return StepGoTo(t, dt, slam, scan, bumped);
+    case MissionState::kContourFollow: return StepContour(t, dt, slam, scan, bumped);
+    default: return Halt();
+  }
+}
+
+WheelCommand Mission::StepWallFollow(double t, double dt, const slam::Slam& slam,
+                                     const RangeScan& scan, bool bumped) {
     const Twist tw = follower_.Step(t, scan, bumped);
     // The loop's anchor: a pose after 1.5 s of steady following, so it lies on
     // the path the robot will come back along.
@@ -165,14 +181,173 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
       }
     }
     return ToWheels(tw, dt);
+}
+
+namespace {
+
+Eigen::Vector2d Rotate(const Eigen::Vector2d& v, double a) {
+  return {std::cos(a) * v.x() - std::sin(a) * v.y(), std::sin(a) * v.x() + std::cos(a) * v.y()};
+}
+
+}  // namespace
+
+WheelCommand Mission::StepModel(double t, const slam::Slam& slam) {
+  // Paper §5: model the room from the line map, then complete what is incomplete.
+  const EnvironmentModel& m = modeler_.Update(slam.map_lines(), slam.map_trajectory());
+  if (m.pending() == 0) {
+    int complete = 0;
+    for (const auto& o : m.objects) complete += o.complete;
+    Enter(MissionState::kDone, t,
+          "room modelled: " + std::to_string(m.objects.size()) + " objects, " +
+              std::to_string(complete) + " complete");
+    return Halt();
   }
-  if (state_ == MissionState::kModel) {
-    Enter(MissionState::kDone, t, "room modelled");
-    last_cmd_ = {};
-    return {};
+  // Step 2: the nearest incomplete free object, and its line nearest the robot.
+  const Pose2 me = slam.map_pose();
+  const ObjectModel* target = nullptr;
+  double best = 1e18;
+  for (const auto& o : m.objects) {
+    if (o.kind != ObjectKind::kFree || o.complete || o.given_up) continue;
+    const double d = std::hypot(0.5 * (o.box.xmin + o.box.xmax) - me.x, 0.5 * (o.box.ymin + o.box.ymax) - me.y);
+    if (d < best) {
+      best = d;
+      target = &o;
+    }
   }
-  last_cmd_ = {};
-  return {};
+  const auto lines = slam.map_lines();
+  const slam::LineFeature* side = nullptr;
+  best = 1e18;
+  for (const auto& l : lines) {
+    if (std::find(target->lines.begin(), target->lines.end(), l.id) == target->lines.end()) continue;
+    const Eigen::Vector2d mid = 0.5 * (l.p0 + l.p1);
+    const double d = std::hypot(mid.x() - me.x, mid.y() - me.y);
+    if (d < best) {
+      best = d;
+      side = &l;
+    }
+  }
+  target_ = target->id;
+  if (side == nullptr) {
+    modeler_.GiveUp(target_, "no line to approach");
+    return Halt();
+  }
+  // P1: at the contour-following distance from the line's centre, outside the
+  // object; heading along the line with the object on the right.
+  const Eigen::Vector2d mid = 0.5 * (side->p0 + side->p1);
+  const Eigen::Vector2d centre(0.5 * (target->box.xmin + target->box.xmax),
+                               0.5 * (target->box.ymin + target->box.ymax));
+  Eigen::Vector2d n(std::cos(side->theta), std::sin(side->theta));
+  if (n.dot(mid - centre) < 0) n = -n;
+  const Eigen::Vector2d p1_map = mid + follow_distance_m_ * n;
+  const Eigen::Vector2d dir(n.y(), -n.x());
+  const double rot = slam.map_rotation();
+  p1_ = Rotate(p1_map, -rot);
+  p1_heading_ = NormalizeAngle(std::atan2(dir.y(), dir.x()) - rot);
+  if (!Replan(slam, RangeScan{})) {
+    modeler_.GiveUp(target_, "P1 unreachable");
+    reason_ = "object " + std::to_string(target_) + ": P1 unreachable";
+    return Halt();
+  }
+  Enter(MissionState::kGoToP1, t, "going to object " + std::to_string(target_));
+  return Halt();
+}
+
+bool Mission::Replan(const slam::Slam& slam, const RangeScan& scan) {
+  std::vector<Obstacle> obstacles;
+  for (const auto& l : slam.lines()) obstacles.push_back({l.p0, l.p1});
+  // What the IR sensors see now, mapped or not.
+  const Pose2 me = slam.pose();
+  for (int i = 0; i < kNumIrSensors; ++i) {
+    if (!scan.range_m[i]) continue;
+    const auto& m = mounts_[i];
+    const Eigen::Vector2d r(m.x + *scan.range_m[i] * std::cos(m.theta), m.y + *scan.range_m[i] * std::sin(m.theta));
+    const Eigen::Vector2d w = Eigen::Vector2d(me.x, me.y) + Rotate(r, me.theta);
+    obstacles.push_back({w, w});
+  }
+  PlannerOptions po;
+  po.inflation_m = geometry_.radius_m + explore_.clearance_m;
+  auto path = PlanPath(obstacles, {me.x, me.y}, p1_, po);
+  if (!path) return false;
+  path_ = *path;
+  return true;
+}
+
+WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
+                               bool bumped) {
+  if (t - state_since_ > explore_.go_to_timeout_s) {
+    modeler_.GiveUp(target_, "P1 not reached in time");
+    Enter(MissionState::kModel, t, "object " + std::to_string(target_) + ": P1 not reached");
+    return Halt();
+  }
+  if (bumped) backoff_until_ = t + 0.6;
+  if (t < backoff_until_) return ToWheels({-0.06, 0}, dt);
+  const Pose2 me = slam.pose();
+  const Eigen::Vector2d pos(me.x, me.y);
+  const auto front = follower_.FrontDistance(scan);
+  if ((front && *front < explore_.front_stop_m) || t - last_plan_ > explore_.replan_period_s) {
+    last_plan_ = t;
+    if (!Replan(slam, scan) && front && *front < explore_.front_stop_m) {
+      return ToWheels({0, explore_.k_heading * 0.3}, dt);  // blocked: look around
+    }
+  }
+  if ((pos - p1_).norm() < explore_.goal_tolerance_m) {
+    const double err = NormalizeAngle(p1_heading_ - me.theta);
+    if (std::abs(err) < explore_.heading_tolerance_rad) {
+      follower_.StartFollowing(t);
+      contour_turned_ = 0;
+      last_theta_ = me.theta;
+      windows_seen_ = slam.stats().windows;
+      Enter(MissionState::kContourFollow, t, "contour following object " + std::to_string(target_));
+      return ToWheels({0, 0}, dt);
+    }
+    return ToWheels({0, std::clamp(explore_.k_heading * err, -0.8, 0.8)}, dt);
+  }
+  // Pure pursuit on the path: aim at the first path point beyond the lookahead.
+  Eigen::Vector2d aim = path_.empty() ? p1_ : path_.back();
+  for (const auto& p : path_) {
+    if ((p - pos).norm() > explore_.lookahead_m) {
+      aim = p;
+      break;
+    }
+  }
+  // Drop the corners already passed.
+  while (path_.size() > 1 && (path_.front() - pos).norm() < explore_.lookahead_m) path_.erase(path_.begin());
+  const double err = NormalizeAngle(std::atan2(aim.y() - pos.y(), aim.x() - pos.x()) - me.theta);
+  double v = explore_.cruise_speed_mps * std::max(0.0, std::cos(err));
+  if (std::abs(err) > 0.8) v = 0;
+  v = std::min(v, 0.6 * (pos - p1_).norm() + 0.03);
+  if (front && *front < explore_.front_stop_m) v = 0;
+  return ToWheels({v, std::clamp(explore_.k_heading * err, -1.0, 1.0)}, dt);
+}
+
+WheelCommand Mission::StepContour(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
+                                  bool bumped) {
+  const Twist tw = follower_.Step(t, scan, bumped);
+  contour_turned_ += NormalizeAngle(slam.pose().theta - last_theta_);
+  last_theta_ = slam.pose().theta;
+  if (slam.stats().windows != windows_seen_) {
+    // New lines may have completed the object.
+    windows_seen_ = slam.stats().windows;
+    const EnvironmentModel& m = modeler_.Update(slam.map_lines(), slam.map_trajectory());
+    for (const auto& o : m.objects) {
+      if (o.id == target_ && o.complete) {
+        Enter(MissionState::kModel, t, "object " + std::to_string(target_) + " complete");
+        return Halt();
+      }
+    }
+  }
+  if (contour_turned_ < -2 * M_PI - 0.6) {
+    // Walked all round it and it is still open: say so and carry on.
+    modeler_.GiveUp(target_, "contour followed all round, still incomplete");
+    Enter(MissionState::kModel, t, "object " + std::to_string(target_) + " incomplete after a full contour");
+    return Halt();
+  }
+  if (t - state_since_ > explore_.contour_timeout_s) {
+    modeler_.GiveUp(target_, "contour following timed out");
+    Enter(MissionState::kModel, t, "object " + std::to_string(target_) + ": contour following timed out");
+    return Halt();
+  }
+  return ToWheels(tw, dt);
 }
 
 }  // namespace irslam::control

@@ -5,9 +5,12 @@
 #ifndef IRSLAM_CONTROL_MISSION_H_
 #define IRSLAM_CONTROL_MISSION_H_
 
+#include <array>
 #include <string>
 #include <vector>
 
+#include "control/path_planner.h"
+#include "control/room_model.h"
 #include "control/wall_follower.h"
 #include "slam/slam.h"
 #include "slam/types.h"
@@ -35,9 +38,23 @@ struct MissionOptions {
   int wall_follow_loops = 1;         // loops of the room before modelling (Fig. 18: 5)
 };
 
+struct ExploreOptions {
+  double clearance_m = 0.08;          // planned paths keep robot radius + this from mapped lines
+  double goal_tolerance_m = 0.08;     // P1 reached
+  double heading_tolerance_rad = 0.12;
+  double cruise_speed_mps = 0.18;
+  double lookahead_m = 0.25;
+  double k_heading = 2.5;
+  double replan_period_s = 2.0;
+  double front_stop_m = 0.32;         // unmapped obstacle ahead while going to P1: stop, replan
+  double go_to_timeout_s = 90;        // give the object up if P1 is not reached by then
+  double contour_timeout_s = 150;     // give up completing an object after this
+};
+
 class Mission {
  public:
-  Mission(MissionOptions options, WallFollowerOptions wall, const slam::SlamOptions& slam);
+  Mission(MissionOptions options, WallFollowerOptions wall, ExploreOptions explore,
+          ModelOptions model, const slam::SlamOptions& slam);
 
   bool Start(double t, std::string* why);
   void Stop(double t);
@@ -51,6 +68,10 @@ class Mission {
   MissionState state() const { return state_; }
   const std::string& reason() const { return reason_; }
   const WallFollower& wall_follower() const { return follower_; }
+  const EnvironmentModel& model() const { return modeler_.model(); }
+  int target_object() const { return target_; }
+  // The go-to path (internal frame) and P1, for status and drawings.
+  const std::vector<Eigen::Vector2d>& path() const { return path_; }
   double started_at() const { return started_at_; }
   // Robot times at which wall-following loops of the room closed.
   const std::vector<double>& loop_times() const { return loop_times_; }
@@ -58,10 +79,33 @@ class Mission {
  private:
   void Enter(MissionState s, double t, std::string reason);
   WheelCommand ToWheels(const Twist& tw, double dt);
+  WheelCommand StepWallFollow(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);
+  WheelCommand StepModel(double t, const slam::Slam& slam);
+  WheelCommand StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);
+  WheelCommand StepContour(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);
+  bool Replan(const slam::Slam& slam, const RangeScan& scan);
+  WheelCommand Halt() {
+    last_cmd_ = {};
+    return {};
+  }
 
   MissionOptions options_;
+  ExploreOptions explore_;
   slam::RobotGeometry geometry_;
+  std::array<slam::SensorMount, kNumIrSensors> mounts_;
+  double follow_distance_m_;
   WallFollower follower_;
+  Modeler modeler_;
+  int target_ = 0;                     // object being completed
+  Eigen::Vector2d p1_ = Eigen::Vector2d::Zero();  // internal frame
+  double p1_heading_ = 0;
+  std::vector<Eigen::Vector2d> path_;
+  double state_since_ = 0;
+  double last_plan_ = -1e9;
+  double backoff_until_ = -1e9;
+  int windows_seen_ = 0;
+  double contour_turned_ = 0;
+  double last_theta_ = 0;
   MissionState state_ = MissionState::kIdle;
   MissionState resume_state_ = MissionState::kIdle;
   std::string reason_;

@@ -20,7 +20,7 @@ RobotCore::RobotCore(CoreOptions options)
       motor_(options_.motor),
       calibration_(options_.ir),
       slam_(options_.slam),
-      mission_(options_.mission, options_.wall, options_.slam) {}
+      mission_(options_.mission, options_.wall, options_.explore, options_.model, options_.slam) {}
 
 void RobotCore::OnFrame(const can_frame& frame, double now_s) {
   const drivers::MotorClient::Event ev = motor_.Handle(frame, now_s);
@@ -111,7 +111,9 @@ nlohmann::json RobotCore::Status(double now_s) const {
                 {"updates", st.updates}, {"insertions", st.insertions},
                 {"rejected_angle", st.rejected_angle}, {"merges", st.merges},
                 {"loop_closures", st.loop_closures}}},
-      {"objects", 0},
+      {"objects", mission_.model().objects.size()},
+      {"objects_pending", mission_.model().pending()},
+      {"target_object", mission_.target_object()},
       {"ir_ranges", ranges},
       {"ir_adc", last_adc_},
       {"command", {last_cmd_.left_mps, last_cmd_.right_mps}},
@@ -138,6 +140,24 @@ nlohmann::json RobotCore::Status(double now_s) const {
 }
 
 nlohmann::json RobotCore::Map() const {
+  const EnvironmentModel& model = mission_.model();
+  const auto box_json = [](const Box& b) { return nlohmann::json{b.xmin, b.ymin, b.xmax, b.ymax}; };
+  nlohmann::json room = {{"walls", {{"bottom", model.room.walls[0]},
+                                    {"right", model.room.walls[1]},
+                                    {"top", model.room.walls[2]},
+                                    {"left", model.room.walls[3]}}},
+                         {"box", model.room.box ? box_json(*model.room.box) : nlohmann::json()}};
+  nlohmann::json objects = nlohmann::json::array();
+  for (const auto& o : model.objects) {
+    nlohmann::json j = {{"id", o.id},
+                        {"kind", ToString(o.kind)},
+                        {"lines", o.lines},
+                        {"complete", o.complete},
+                        {"box", box_json(o.box)},
+                        {"open_ends", o.open_ends}};
+    if (!o.note.empty()) j["note"] = o.note;
+    objects.push_back(j);
+  }
   nlohmann::json lines = nlohmann::json::array();
   for (const auto& l : slam_.map_lines()) {
     lines.push_back({{"id", l.id},
@@ -157,12 +177,8 @@ nlohmann::json RobotCore::Map() const {
       {"pose", PoseJson(slam_.map_pose())},
       {"pose_cov", MatrixJson(slam_.map_pose_cov())},
       {"lines", lines},
-      {"room", {{"walls", {{"bottom", nlohmann::json::array()},
-                           {"right", nlohmann::json::array()},
-                           {"top", nlohmann::json::array()},
-                           {"left", nlohmann::json::array()}}},
-                {"box", nullptr}}},
-      {"objects", nlohmann::json::array()},
+      {"room", room},
+      {"objects", objects},
       {"trajectory", traj},
   };
 }

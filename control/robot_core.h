@@ -25,6 +25,8 @@ struct CoreOptions {
   drivers::MotorClientOptions motor;      // [controller]
   WallFollowerOptions wall;               // [wall_follow]
   MissionOptions mission;                 // [mission]
+  ExploreOptions explore;                 // [exploration]
+  ModelOptions model;                     // [model]
   double period_s = 0.02;                 // [control].period_s
   double heartbeat_period_s = 0.1;        // [controller].heartbeat_period_s
 };

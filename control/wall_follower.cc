@@ -47,6 +47,12 @@ void WallFollower::Reset() {
   turned_rad_ = 0;
 }
 
+void WallFollower::StartFollowing(double t) {
+  mode_ = FollowMode::kFind;  // force a mode change
+  Enter(FollowMode::kFollow, t);
+  last_t_ = t;
+}
+
 void WallFollower::Leave(double t) {
   Enter(FollowMode::kLeave, t);
   has_followed_ = false;

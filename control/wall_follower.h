@@ -55,6 +55,8 @@ class WallFollower {
   // Turn away (left, a quarter turn) from what is being followed and look for
   // another wall: used when the contour followed was a free object, not the room.
   void Leave(double t);
+  // Start following at once (the robot was placed beside a side, heading along it).
+  void StartFollowing(double t);
   FollowMode mode() const { return mode_; }
   // True once a wall has been found and followed.
   bool following() const { return has_followed_; }

@@ -186,6 +186,32 @@ void ReadMission(const json& j, control::CoreOptions* o, std::string* e) {
   s.Finish();
 }
 
+void ReadExploration(const json& j, control::CoreOptions* o, std::string* e) {
+  Section s(j, "exploration", e);
+  auto& x = o->explore;
+  s.Num("clearance_m", &x.clearance_m, 0, 1);
+  s.Num("goal_tolerance_m", &x.goal_tolerance_m, 0.01, 1);
+  s.Num("heading_tolerance_rad", &x.heading_tolerance_rad, 0.01, 1);
+  s.Num("cruise_speed_mps", &x.cruise_speed_mps, 0.01, 2);
+  s.Num("lookahead_m", &x.lookahead_m, 0.05, 2);
+  s.Num("k_heading", &x.k_heading, 0.1, 20);
+  s.Num("replan_period_s", &x.replan_period_s, 0.1, 60);
+  s.Num("front_stop_m", &x.front_stop_m, 0.1, 2);
+  s.Num("go_to_timeout_s", &x.go_to_timeout_s, 1, 3600);
+  s.Num("contour_timeout_s", &x.contour_timeout_s, 1, 3600);
+  s.Finish();
+}
+
+void ReadModel(const json& j, control::CoreOptions* o, std::string* e) {
+  Section s(j, "model", e);
+  auto& m = o->model;
+  s.Num("axis_tolerance_rad", &m.axis_tolerance_rad, 0.001, 0.7);
+  s.Num("collinear_m", &m.collinear_m, 0.001, 1);
+  s.Num("corner_m", &m.corner_m, 0.01, 2);
+  s.Num("wall_contact_m", &m.wall_contact_m, 0.01, 2);
+  s.Finish();
+}
+
 void ReadBool(const json& j, const char* key, bool* out, Section* s) {
   if (!j.is_object() || !j.contains(key)) return;
   if (!j.at(key).is_boolean()) return s->Fail(key, "must be true or false");
@@ -279,6 +305,8 @@ bool ParseConfig(std::string_view text, control::CoreOptions* options, std::stri
   ReadWallFollow(sub("wall_follow"), &o, error);
   ReadMission(sub("mission"), &o, error);
   ReadSlam(sub("slam"), &o, error);
+  ReadExploration(sub("exploration"), &o, error);
+  ReadModel(sub("model"), &o, error);
   top.Finish();
   if (!error->empty()) return false;
   *options = o;
@@ -311,7 +339,17 @@ std::string DumpConfig(const control::CoreOptions& o) {
   const auto& p = o.slam.pds;
   const auto& x = o.slam.extraction;
   const auto& a = o.slam.association;
+  const auto& ex = o.explore;
+  const auto& mo = o.model;
   json j = {
+      {"exploration", {{"clearance_m", ex.clearance_m}, {"goal_tolerance_m", ex.goal_tolerance_m},
+                       {"heading_tolerance_rad", ex.heading_tolerance_rad},
+                       {"cruise_speed_mps", ex.cruise_speed_mps}, {"lookahead_m", ex.lookahead_m},
+                       {"k_heading", ex.k_heading}, {"replan_period_s", ex.replan_period_s},
+                       {"front_stop_m", ex.front_stop_m}, {"go_to_timeout_s", ex.go_to_timeout_s},
+                       {"contour_timeout_s", ex.contour_timeout_s}}},
+      {"model", {{"axis_tolerance_rad", mo.axis_tolerance_rad}, {"collinear_m", mo.collinear_m},
+                 {"corner_m", mo.corner_m}, {"wall_contact_m", mo.wall_contact_m}}},
       {"robot", {{"wheel_base_m", g.wheel_base_m}, {"wheel_radius_m", g.wheel_radius_m},
                  {"counts_per_rev", g.counts_per_rev}, {"radius_m", g.radius_m},
                  {"max_wheel_speed_mps", g.max_wheel_speed_mps}}},

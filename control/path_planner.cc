@@ -1,0 +1,100 @@
+#include "control/path_planner.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+
+namespace irslam::control {
+namespace {
+
+double SegmentDistance(const Eigen::Vector2d& p, const Obstacle& o) {
+  const Eigen::Vector2d d = o.b - o.a;
+  const double l2 = d.squaredNorm();
+  const double u = l2 > 0 ? std::clamp((p - o.a).dot(d) / l2, 0.0, 1.0) : 0.0;
+  return (p - (o.a + u * d)).norm();
+}
+
+}  // namespace
+
+std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>& obstacles,
+                                                     const Eigen::Vector2d& start,
+                                                     const Eigen::Vector2d& goal,
+                                                     const PlannerOptions& o) {
+  Eigen::Vector2d lo = start.cwiseMin(goal), hi = start.cwiseMax(goal);
+  for (const auto& ob : obstacles) {
+    lo = lo.cwiseMin(ob.a).cwiseMin(ob.b);
+    hi = hi.cwiseMax(ob.a).cwiseMax(ob.b);
+  }
+  lo.array() -= o.margin_m;
+  hi.array() += o.margin_m;
+  const int nx = static_cast<int>(std::ceil((hi.x() - lo.x()) / o.resolution_m)) + 1;
+  const int ny = static_cast<int>(std::ceil((hi.y() - lo.y()) / o.resolution_m)) + 1;
+  if (static_cast<long>(nx) * ny > 4'000'000) return std::nullopt;
+  const auto centre = [&](int ix, int iy) {
+    return Eigen::Vector2d(lo.x() + ix * o.resolution_m, lo.y() + iy * o.resolution_m);
+  };
+  const auto cell = [&](const Eigen::Vector2d& p) {
+    return std::pair<int, int>{static_cast<int>(std::lround((p.x() - lo.x()) / o.resolution_m)),
+                               static_cast<int>(std::lround((p.y() - lo.y()) / o.resolution_m))};
+  };
+  std::vector<uint8_t> blocked(static_cast<size_t>(nx * ny), 0);
+  for (const auto& ob : obstacles) {
+    // Only cells near the obstacle's bounding box can be blocked by it.
+    const Eigen::Vector2d a = ob.a.cwiseMin(ob.b).array() - o.inflation_m;
+    const Eigen::Vector2d b = ob.a.cwiseMax(ob.b).array() + o.inflation_m;
+    const auto [x0, y0] = cell(a);
+    const auto [x1, y1] = cell(b);
+    for (int ix = std::max(0, x0); ix <= std::min(nx - 1, x1); ++ix) {
+      for (int iy = std::max(0, y0); iy <= std::min(ny - 1, y1); ++iy) {
+        if (SegmentDistance(centre(ix, iy), ob) < o.inflation_m) blocked[static_cast<size_t>(iy * nx + ix)] = 1;
+      }
+    }
+  }
+  const auto [sx, sy] = cell(start);
+  const auto [gx, gy] = cell(goal);
+  if (gx < 0 || gy < 0 || gx >= nx || gy >= ny || blocked[static_cast<size_t>(gy * nx + gx)]) return std::nullopt;
+  const int n = nx * ny;
+  std::vector<double> g(static_cast<size_t>(n), 1e18);
+  std::vector<int> from(static_cast<size_t>(n), -1);
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
+  const int s = sy * nx + sx, goal_i = gy * nx + gx;
+  const auto h = [&](int i) { return std::hypot(i % nx - gx, i / nx - gy); };
+  g[static_cast<size_t>(s)] = 0;
+  open.push({h(s), s});
+  const int dx[8] = {1, -1, 0, 0, 1, 1, -1, -1}, dy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
+  while (!open.empty()) {
+    const auto [f, i] = open.top();
+    open.pop();
+    if (i == goal_i) break;
+    if (f > g[static_cast<size_t>(i)] + h(i) + 1e-9) continue;
+    const int ix = i % nx, iy = i / nx;
+    for (int k = 0; k < 8; ++k) {
+      const int jx = ix + dx[k], jy = iy + dy[k];
+      if (jx < 0 || jy < 0 || jx >= nx || jy >= ny) continue;
+      const int j = jy * nx + jx;
+      // Leaving a blocked start is allowed, entering blocked cells is not.
+      if (blocked[static_cast<size_t>(j)]) continue;
+      const double c = g[static_cast<size_t>(i)] + (k < 4 ? 1.0 : M_SQRT2);
+      if (c < g[static_cast<size_t>(j)]) {
+        g[static_cast<size_t>(j)] = c;
+        from[static_cast<size_t>(j)] = i;
+        open.push({c + h(j), j});
+      }
+    }
+  }
+  if (from[static_cast<size_t>(goal_i)] < 0 && goal_i != s) return std::nullopt;
+  std::vector<Eigen::Vector2d> cells;
+  for (int i = goal_i; i != -1; i = from[static_cast<size_t>(i)]) cells.push_back(centre(i % nx, i / nx));
+  std::reverse(cells.begin(), cells.end());
+  // Keep the corners only.
+  std::vector<Eigen::Vector2d> path = {start};
+  for (size_t i = 1; i + 1 < cells.size(); ++i) {
+    const Eigen::Vector2d d0 = cells[i] - cells[i - 1], d1 = cells[i + 1] - cells[i];
+    if ((d0 - d1).norm() > 1e-9) path.push_back(cells[i]);
+  }
+  path.push_back(goal);
+  return path;
+}
+
+}  // namespace irslam::control

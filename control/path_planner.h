@@ -1,0 +1,33 @@
+// Grid path planning for the go-to behaviour: A* (8-connected) on an occupancy
+// grid made from the mapped lines and any extra obstacle points (IR readings),
+// inflated by the robot radius plus a clearance. Pure.
+#ifndef IRSLAM_CONTROL_PATH_PLANNER_H_
+#define IRSLAM_CONTROL_PATH_PLANNER_H_
+
+#include <Eigen/Core>
+#include <optional>
+#include <vector>
+
+namespace irslam::control {
+
+struct PlannerOptions {
+  double resolution_m = 0.05;
+  double inflation_m = 0.25;  // robot radius + clearance
+  double margin_m = 1.0;      // grid extends this far beyond the obstacles
+};
+
+struct Obstacle {
+  Eigen::Vector2d a, b;  // a segment (a == b: a point)
+};
+
+// A path from start to goal (both included), simplified to its corners; nullopt if
+// the goal cannot be reached. A start inside the inflation is allowed (the robot
+// may stand closer to a wall than the clearance).
+std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>& obstacles,
+                                                     const Eigen::Vector2d& start,
+                                                     const Eigen::Vector2d& goal,
+                                                     const PlannerOptions& options);
+
+}  // namespace irslam::control
+
+#endif  // IRSLAM_CONTROL_PATH_PLANNER_H_

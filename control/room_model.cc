@@ -1,0 +1,247 @@
+#include "control/room_model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace irslam::control {
+namespace {
+
+// An axis-aligned view of a mapped line.
+struct Side {
+  int id = 0;
+  bool horizontal = false;  // y = c, extent in x; else x = c, extent in y
+  double c = 0, a0 = 0, a1 = 0;
+  int seen_from = 0;        // +1: seen from the greater-coordinate side, -1: from the lesser
+  Eigen::Vector2d End(int k) const {
+    const double a = k == 0 ? a0 : a1;
+    return horizontal ? Eigen::Vector2d(a, c) : Eigen::Vector2d(c, a);
+  }
+};
+
+int Find(std::vector<int>& parent, int i) {
+  while (parent[static_cast<size_t>(i)] != i) i = parent[static_cast<size_t>(i)] = parent[static_cast<size_t>(parent[static_cast<size_t>(i)])];
+  return i;
+}
+
+double Overlap1d(double a0, double a1, double b0, double b1) {
+  return std::min(a1, b1) - std::max(a0, b0);
+}
+
+}  // namespace
+
+const char* ToString(ObjectKind k) { return k == ObjectKind::kWallContact ? "wall_contact" : "free"; }
+
+int EnvironmentModel::pending() const {
+  int n = 0;
+  for (const auto& o : objects) n += o.kind == ObjectKind::kFree && !o.complete && !o.given_up;
+  return n;
+}
+
+void Modeler::GiveUp(int object_id, const std::string& why) {
+  given_up_.emplace_back(object_id, why);
+  for (auto& o : model_.objects) {
+    if (o.id == object_id) {
+      o.given_up = true;
+      o.note = why;
+    }
+  }
+}
+
+const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& lines,
+                                        const std::vector<slam::TrajectoryPoint>& trajectory) {
+  const auto& o = options_;
+  std::vector<Side> sides;
+  for (const auto& l : lines) {
+    const double t = l.theta;
+    Side s;
+    s.id = l.id;
+    if (std::abs(std::remainder(t - M_PI / 2, M_PI)) < o.axis_tolerance_rad) {
+      s.horizontal = true;
+      s.c = 0.5 * (l.p0.y() + l.p1.y());
+      s.a0 = std::min(l.p0.x(), l.p1.x());
+      s.a1 = std::max(l.p0.x(), l.p1.x());
+    } else if (std::abs(std::remainder(t, M_PI)) < o.axis_tolerance_rad) {
+      s.c = 0.5 * (l.p0.x() + l.p1.x());
+      s.a0 = std::min(l.p0.y(), l.p1.y());
+      s.a1 = std::max(l.p0.y(), l.p1.y());
+    } else {
+      continue;
+    }
+    // Which side the robot saw it from: the trajectory point nearest its middle.
+    const Eigen::Vector2d mid = 0.5 * (l.p0 + l.p1);
+    double best = 1e18;
+    for (const auto& p : trajectory) {
+      const double d = std::hypot(p.pose.x - mid.x(), p.pose.y - mid.y());
+      if (d < best) {
+        best = d;
+        const double coord = s.horizontal ? p.pose.y : p.pose.x;
+        s.seen_from = coord >= s.c ? +1 : -1;
+      }
+    }
+    sides.push_back(s);
+  }
+
+  EnvironmentModel m;
+  // The Room: the outermost sides seen from inside. Bottom: horizontal, seen from
+  // above, lowest; top: seen from below, highest; left/right likewise in x.
+  std::vector<bool> is_wall(sides.size(), false);
+  const auto pick = [&](bool horizontal, int seen_from, int wall_index) -> std::optional<double> {
+    std::optional<double> extreme;
+    for (const auto& s : sides) {
+      if (s.horizontal != horizontal || s.seen_from != seen_from) continue;
+      if (!extreme || (seen_from > 0 ? s.c < *extreme : s.c > *extreme)) extreme = s.c;
+    }
+    if (!extreme) return std::nullopt;
+    for (size_t i = 0; i < sides.size(); ++i) {
+      const auto& s = sides[i];
+      if (s.horizontal == horizontal && s.seen_from == seen_from && std::abs(s.c - *extreme) < o.collinear_m) {
+        is_wall[i] = true;
+        m.room.walls[static_cast<size_t>(wall_index)].push_back(s.id);
+      }
+    }
+    return extreme;
+  };
+  const auto bottom = pick(true, +1, 0);
+  const auto right = pick(false, -1, 1);
+  const auto top = pick(true, -1, 2);
+  const auto left = pick(false, +1, 3);
+  if (bottom && right && top && left && *left < *right && *bottom < *top) {
+    m.room.box = Box{*left, *bottom, *right, *top};
+  }
+
+  // Objects: the other sides, grouped where they meet (corners, or collinear pieces).
+  std::vector<size_t> rest;
+  for (size_t i = 0; i < sides.size(); ++i) {
+    if (!is_wall[i]) rest.push_back(i);
+  }
+  std::vector<int> parent(rest.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto meets = [&](const Side& a, const Side& b) {
+    if (a.horizontal == b.horizontal) {
+      return std::abs(a.c - b.c) < o.collinear_m && Overlap1d(a.a0, a.a1, b.a0, b.a1) > -o.corner_m;
+    }
+    const Side& h = a.horizontal ? a : b;
+    const Side& v = a.horizontal ? b : a;
+    // Corner (v.c, h.c) near an end of both.
+    const bool near_h = std::min(std::abs(v.c - h.a0), std::abs(v.c - h.a1)) < o.corner_m ||
+                        (v.c > h.a0 && v.c < h.a1);
+    const bool near_v = std::min(std::abs(h.c - v.a0), std::abs(h.c - v.a1)) < o.corner_m ||
+                        (h.c > v.a0 && h.c < v.a1);
+    return near_h && near_v && (std::min(std::abs(v.c - h.a0), std::abs(v.c - h.a1)) < o.corner_m ||
+                                std::min(std::abs(h.c - v.a0), std::abs(h.c - v.a1)) < o.corner_m);
+  };
+  for (size_t i = 0; i < rest.size(); ++i) {
+    for (size_t j = i + 1; j < rest.size(); ++j) {
+      if (meets(sides[rest[i]], sides[rest[j]])) {
+        parent[static_cast<size_t>(Find(parent, static_cast<int>(i)))] = Find(parent, static_cast<int>(j));
+      }
+    }
+  }
+  std::vector<std::vector<size_t>> groups;
+  std::vector<int> group_of(rest.size(), -1);
+  for (size_t i = 0; i < rest.size(); ++i) {
+    const int root = Find(parent, static_cast<int>(i));
+    if (group_of[static_cast<size_t>(root)] < 0) {
+      group_of[static_cast<size_t>(root)] = static_cast<int>(groups.size());
+      groups.emplace_back();
+    }
+    groups[static_cast<size_t>(group_of[static_cast<size_t>(root)])].push_back(rest[i]);
+  }
+
+  const auto near_wall = [&](const Eigen::Vector2d& p) {
+    if (!m.room.box) return false;
+    const Box& r = *m.room.box;
+    return std::abs(p.x() - r.xmin) < o.wall_contact_m || std::abs(p.x() - r.xmax) < o.wall_contact_m ||
+           std::abs(p.y() - r.ymin) < o.wall_contact_m || std::abs(p.y() - r.ymax) < o.wall_contact_m;
+  };
+  for (const auto& g : groups) {
+    ObjectModel obj;
+    Box b{1e18, 1e18, -1e18, -1e18};
+    for (size_t i : g) {
+      const Side& s = sides[i];
+      obj.lines.push_back(s.id);
+      for (int k = 0; k < 2; ++k) {
+        const Eigen::Vector2d e = s.End(k);
+        b.xmin = std::min(b.xmin, e.x());
+        b.xmax = std::max(b.xmax, e.x());
+        b.ymin = std::min(b.ymin, e.y());
+        b.ymax = std::max(b.ymax, e.y());
+      }
+    }
+    // Open ends: a line end that meets neither another side of the object
+    // (orthogonal, at a corner; or collinear) nor a wall of the room.
+    bool touches_wall = false;
+    for (size_t i : g) {
+      const Side& s = sides[i];
+      for (int k = 0; k < 2; ++k) {
+        const Eigen::Vector2d e = s.End(k);
+        bool closed = false;
+        for (size_t j : g) {
+          if (j == i) continue;
+          const Side& t = sides[j];
+          if (t.horizontal != s.horizontal) {
+            const Eigen::Vector2d corner = s.horizontal ? Eigen::Vector2d(t.c, s.c) : Eigen::Vector2d(s.c, t.c);
+            // The corner's position along t is s's offset.
+            const bool within_t = s.c > t.a0 - o.corner_m && s.c < t.a1 + o.corner_m;
+            if ((corner - e).norm() < o.corner_m && within_t) closed = true;
+          } else if (std::abs(t.c - s.c) < o.collinear_m &&
+                     std::min((t.End(0) - e).norm(), (t.End(1) - e).norm()) < o.corner_m) {
+            closed = true;
+          }
+        }
+        if (!closed && near_wall(e)) {
+          closed = true;
+          touches_wall = true;
+        }
+        obj.open_ends += closed ? 0 : 1;
+      }
+    }
+    b = Box{b.xmin, b.ymin, b.xmax, b.ymax};
+    const bool box_at_wall = m.room.box && (std::abs(b.xmin - m.room.box->xmin) < o.wall_contact_m ||
+                                            std::abs(b.xmax - m.room.box->xmax) < o.wall_contact_m ||
+                                            std::abs(b.ymin - m.room.box->ymin) < o.wall_contact_m ||
+                                            std::abs(b.ymax - m.room.box->ymax) < o.wall_contact_m);
+    obj.kind = (touches_wall || box_at_wall) ? ObjectKind::kWallContact : ObjectKind::kFree;
+    const size_t needed = obj.kind == ObjectKind::kWallContact ? 3 : 4;
+    obj.complete = obj.open_ends == 0 && obj.lines.size() >= needed;
+    obj.box = b;
+    std::sort(obj.lines.begin(), obj.lines.end());
+    m.objects.push_back(obj);
+  }
+
+  // Stable ids: an object keeps the id of the previous object it overlaps most.
+  std::vector<bool> taken(model_.objects.size(), false);
+  for (auto& obj : m.objects) {
+    double best = 0;
+    int best_k = -1;
+    for (size_t k = 0; k < model_.objects.size(); ++k) {
+      if (taken[k]) continue;
+      const Box& p = model_.objects[k].box;
+      const double ix = Overlap1d(obj.box.xmin, obj.box.xmax, p.xmin, p.xmax) + 0.1;
+      const double iy = Overlap1d(obj.box.ymin, obj.box.ymax, p.ymin, p.ymax) + 0.1;
+      if (ix <= 0 || iy <= 0) continue;
+      if (ix * iy > best) {
+        best = ix * iy;
+        best_k = static_cast<int>(k);
+      }
+    }
+    if (best_k >= 0) {
+      taken[static_cast<size_t>(best_k)] = true;
+      obj.id = model_.objects[static_cast<size_t>(best_k)].id;
+    } else {
+      obj.id = next_id_++;
+    }
+    for (const auto& [gid, why] : given_up_) {
+      if (gid == obj.id && !obj.complete) {
+        obj.given_up = true;
+        obj.note = why;
+      }
+    }
+  }
+  std::sort(m.objects.begin(), m.objects.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+  model_ = std::move(m);
+  return model_;
+}
+
+}  // namespace irslam::control

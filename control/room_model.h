@@ -1,0 +1,81 @@
+// Environment modelling from the line map (paper §5): the Room (bottom, right,
+// top, left walls, each one or more collinear lines), wall-contact objects (the
+// side against the wall is never seen: 3 lines), free objects (4 lines),
+// compound furniture (touching boxes: one object with more lines), incomplete
+// objects (open ends). Pure: lines and trajectory in (map frame: the first wall
+// along x, so lines are axis-aligned), model out. Object ids are kept stable
+// between calls by matching boxes.
+#ifndef IRSLAM_CONTROL_ROOM_MODEL_H_
+#define IRSLAM_CONTROL_ROOM_MODEL_H_
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "slam/slam.h"
+
+namespace irslam::control {
+
+struct ModelOptions {
+  double axis_tolerance_rad = 0.12;  // lines this close to an axis count as axis-aligned
+  double collinear_m = 0.08;         // pieces of one wall/side: offsets within this
+  double corner_m = 0.20;            // two sides meet: their corner within this of both ends
+  double wall_contact_m = 0.15;      // an object this close to a wall touches it
+};
+
+struct Box {
+  double xmin = 0, ymin = 0, xmax = 0, ymax = 0;
+  double width() const { return xmax - xmin; }
+  double height() const { return ymax - ymin; }
+};
+
+struct RoomModel {
+  // bottom, right, top, left: the ids of the collinear lines of each wall.
+  std::array<std::vector<int>, 4> walls;
+  std::optional<Box> box;
+};
+
+enum class ObjectKind { kWallContact, kFree };
+const char* ToString(ObjectKind k);
+
+struct ObjectModel {
+  int id = 0;
+  ObjectKind kind = ObjectKind::kFree;
+  std::vector<int> lines;
+  bool complete = false;
+  Box box;
+  int open_ends = 0;       // line ends that meet no other side (nor a wall)
+  bool given_up = false;   // exploration could not complete it (kept: complete = false)
+  std::string note;
+};
+
+struct EnvironmentModel {
+  RoomModel room;
+  std::vector<ObjectModel> objects;
+  // Incomplete free objects not given up: what exploration still has to visit.
+  int pending() const;
+};
+
+class Modeler {
+ public:
+  explicit Modeler(ModelOptions options) : options_(options) {}
+
+  // Builds the model from map-frame lines; `trajectory` (map frame) tells from
+  // which side each line was seen. Object ids persist across calls.
+  const EnvironmentModel& Update(const std::vector<slam::LineFeature>& lines,
+                                 const std::vector<slam::TrajectoryPoint>& trajectory);
+  // Marks an object as not completable (e.g. unreachable); it stays incomplete.
+  void GiveUp(int object_id, const std::string& why);
+  const EnvironmentModel& model() const { return model_; }
+
+ private:
+  ModelOptions options_;
+  EnvironmentModel model_;
+  int next_id_ = 1;
+  std::vector<std::pair<int, std::string>> given_up_;
+};
+
+}  // namespace irslam::control
+
+#endif  // IRSLAM_CONTROL_ROOM_MODEL_H_
