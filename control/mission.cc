@@ -50,6 +50,7 @@ bool Mission::Start(double t, std::string* why) {
   }
   started_at_ = t;
   last_t_ = t;
+  survey_done_ = false;
   loops_done_ = 0;
   loop_times_.clear();
   Enter(MissionState::kWallFollow, t, "");
@@ -94,7 +95,19 @@ WheelCommand Mission::ToWheels(const Twist& tw, double dt) {
   return last_cmd_;
 }
 
-WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& scan, bool bumped) {
+WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& scan, uint8_t bumpers) {
+  const bool bumped = bumpers != 0;
+  bumpers_now_ = bumpers;
+  if (bumped) {
+    // Remember what was hit, so planned paths keep away from it: the contact is
+    // at the body's edge, ahead-left, ahead-right or ahead.
+    const Pose2 me = slam.pose();
+    const bool left = bumpers & 1, right = bumpers & 2;
+    const double a = me.theta + (left && !right ? 0.6 : right && !left ? -0.6 : 0.0);
+    const double r = geometry_.radius_m + 0.02;
+    const Eigen::Vector2d p(me.x + r * std::cos(a), me.y + r * std::sin(a));
+    if (bump_points_.empty() || (bump_points_.back() - p).norm() > 0.03) bump_points_.push_back(p);
+  }
   const double dt = std::clamp(t - last_t_, 0.0, 0.1);
   last_t_ = t;
   switch (state_) {
@@ -194,6 +207,28 @@ Eigen::Vector2d Rotate(const Eigen::Vector2d& v, double a) {
 WheelCommand Mission::StepModel(double t, const slam::Slam& slam) {
   // Paper §5: model the room from the line map, then complete what is incomplete.
   const EnvironmentModel& m = modeler_.Update(slam.map_lines(), slam.map_trajectory());
+  if (m.pending() == 0 && explore_.survey_centre && !survey_done_ && m.room.box) {
+    // Free objects far from every wall were never within range: look from the
+    // middle of the room once (the free cell nearest its centre).
+    survey_done_ = true;
+    const Box& r = *m.room.box;
+    const Eigen::Vector2d c(0.5 * (r.xmin + r.xmax), 0.5 * (r.ymin + r.ymax));
+    const double rot = slam.map_rotation();
+    for (double radius = 0; radius < 1.2; radius += 0.2) {
+      for (int k = 0; k < (radius > 0 ? 8 : 1); ++k) {
+        const Eigen::Vector2d p = c + radius * Eigen::Vector2d(std::cos(k * M_PI / 4), std::sin(k * M_PI / 4));
+        p1_ = Rotate(p, -rot);
+        p1_heading_ = slam.pose().theta;
+        if (Replan(slam, RangeScan{})) {
+          target_ = 0;
+          survey_turned_ = -1;
+          Enter(MissionState::kGoToP1, t, "surveying the room from its centre");
+          last_plan_ = t;
+          return Halt();
+        }
+      }
+    }
+  }
   if (m.pending() == 0) {
     int complete = 0;
     for (const auto& o : m.objects) complete += o.complete;
@@ -214,47 +249,57 @@ WheelCommand Mission::StepModel(double t, const slam::Slam& slam) {
       target = &o;
     }
   }
+  // Try its sides nearest first: P1 at the contour-following distance from the
+  // side's centre, on the side it was seen from (the outside), heading along it
+  // with the object on the right.
+  target_ = target->id;
   const auto lines = slam.map_lines();
-  const slam::LineFeature* side = nullptr;
-  best = 1e18;
+  const auto trajectory = slam.map_trajectory();
+  std::vector<std::pair<double, const slam::LineFeature*>> sides;
   for (const auto& l : lines) {
     if (std::find(target->lines.begin(), target->lines.end(), l.id) == target->lines.end()) continue;
     const Eigen::Vector2d mid = 0.5 * (l.p0 + l.p1);
-    const double d = std::hypot(mid.x() - me.x, mid.y() - me.y);
-    if (d < best) {
-      best = d;
-      side = &l;
+    sides.emplace_back(std::hypot(mid.x() - me.x, mid.y() - me.y), &l);
+  }
+  std::sort(sides.begin(), sides.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  const double rot = slam.map_rotation();
+  for (const auto& [d, side] : sides) {
+    const Eigen::Vector2d mid = 0.5 * (side->p0 + side->p1);
+    Eigen::Vector2d n(std::cos(side->theta), std::sin(side->theta));
+    double nearest = 1e18;
+    Eigen::Vector2d seen_from = mid + n;
+    for (const auto& p : trajectory) {
+      const double dd = std::hypot(p.pose.x - mid.x(), p.pose.y - mid.y());
+      if (dd < nearest) {
+        nearest = dd;
+        seen_from = {p.pose.x, p.pose.y};
+      }
+    }
+    if (n.dot(seen_from - mid) < 0) n = -n;
+    const Eigen::Vector2d p1_map = mid + follow_distance_m_ * n;
+    const Eigen::Vector2d dir(n.y(), -n.x());
+    p1_ = Rotate(p1_map, -rot);
+    p1_heading_ = NormalizeAngle(std::atan2(dir.y(), dir.x()) - rot);
+    if (Replan(slam, RangeScan{})) {
+      Enter(MissionState::kGoToP1, t, "going to object " + std::to_string(target_));
+      last_plan_ = t;
+      return Halt();
     }
   }
-  target_ = target->id;
-  if (side == nullptr) {
-    modeler_.GiveUp(target_, "no line to approach");
-    return Halt();
-  }
-  // P1: at the contour-following distance from the line's centre, outside the
-  // object; heading along the line with the object on the right.
-  const Eigen::Vector2d mid = 0.5 * (side->p0 + side->p1);
-  const Eigen::Vector2d centre(0.5 * (target->box.xmin + target->box.xmax),
-                               0.5 * (target->box.ymin + target->box.ymax));
-  Eigen::Vector2d n(std::cos(side->theta), std::sin(side->theta));
-  if (n.dot(mid - centre) < 0) n = -n;
-  const Eigen::Vector2d p1_map = mid + follow_distance_m_ * n;
-  const Eigen::Vector2d dir(n.y(), -n.x());
-  const double rot = slam.map_rotation();
-  p1_ = Rotate(p1_map, -rot);
-  p1_heading_ = NormalizeAngle(std::atan2(dir.y(), dir.x()) - rot);
-  if (!Replan(slam, RangeScan{})) {
-    modeler_.GiveUp(target_, "P1 unreachable");
-    reason_ = "object " + std::to_string(target_) + ": P1 unreachable";
-    return Halt();
-  }
-  Enter(MissionState::kGoToP1, t, "going to object " + std::to_string(target_));
+  modeler_.GiveUp(target_, "P1 unreachable");
+  reason_ = "object " + std::to_string(target_) + ": P1 unreachable";
   return Halt();
 }
 
 bool Mission::Replan(const slam::Slam& slam, const RangeScan& scan) {
   std::vector<Obstacle> obstacles;
-  for (const auto& l : slam.lines()) obstacles.push_back({l.p0, l.p1});
+  // Mapped sides are seen shorter than they are (their ends are passed on
+  // corner arcs): plan around them extended by 15 cm at each end.
+  for (const auto& l : slam.lines()) {
+    const Eigen::Vector2d d = (l.p1 - l.p0).normalized();
+    obstacles.push_back({l.p0 - 0.15 * d, l.p1 + 0.15 * d});
+  }
+  for (const auto& b : bump_points_) obstacles.push_back({b, b});
   // What the IR sensors see now, mapped or not.
   const Pose2 me = slam.pose();
   for (int i = 0; i < kNumIrSensors; ++i) {
@@ -266,6 +311,7 @@ bool Mission::Replan(const slam::Slam& slam, const RangeScan& scan) {
   }
   PlannerOptions po;
   po.inflation_m = geometry_.radius_m + explore_.clearance_m;
+  po.hard_m = geometry_.radius_m + 0.02;
   auto path = PlanPath(obstacles, {me.x, me.y}, p1_, po);
   if (!path) return false;
   path_ = *path;
@@ -275,12 +321,27 @@ bool Mission::Replan(const slam::Slam& slam, const RangeScan& scan) {
 WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
                                bool bumped) {
   if (t - state_since_ > explore_.go_to_timeout_s) {
+    if (target_ == 0) {
+      survey_turned_ = -1;
+      Enter(MissionState::kModel, t, "survey point not reached");
+      return Halt();
+    }
     modeler_.GiveUp(target_, "P1 not reached in time");
     Enter(MissionState::kModel, t, "object " + std::to_string(target_) + ": P1 not reached");
     return Halt();
   }
-  if (bumped) backoff_until_ = t + 0.6;
-  if (t < backoff_until_) return ToWheels({-0.06, 0}, dt);
+  if (bumped && t >= backoff_until_) {
+    backoff_until_ = t + 0.8;
+    backoff_bumpers_ = bumpers_now_;
+    last_plan_ = -1e9;  // replan around what was hit once clear
+  }
+  if (t < backoff_until_) {
+    // Get clear: straight back from a frontal hit; from a side hit, turn on the
+    // spot away from it (backing could run into it when it is beside or behind).
+    if (backoff_bumpers_ == 1) return ToWheels({0, -0.9}, dt);
+    if (backoff_bumpers_ == 2) return ToWheels({0, 0.9}, dt);
+    return ToWheels({-0.08, 0}, dt);
+  }
   const Pose2 me = slam.pose();
   const Eigen::Vector2d pos(me.x, me.y);
   const auto front = follower_.FrontDistance(scan);
@@ -289,6 +350,21 @@ WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, cons
     if (!Replan(slam, scan) && front && *front < explore_.front_stop_m) {
       return ToWheels({0, explore_.k_heading * 0.3}, dt);  // blocked: look around
     }
+  }
+  if (target_ == 0 && (survey_turned_ >= 0 || (pos - p1_).norm() < explore_.goal_tolerance_m)) {
+    // The survey point: one full turn on the spot, then model again.
+    if (survey_turned_ < 0) {
+      survey_turned_ = 0;
+      last_theta_ = me.theta;
+    }
+    survey_turned_ += std::abs(NormalizeAngle(me.theta - last_theta_));
+    last_theta_ = me.theta;
+    if (survey_turned_ > 2 * M_PI + 0.3) {
+      survey_turned_ = -1;
+      Enter(MissionState::kModel, t, "survey done");
+      return Halt();
+    }
+    return ToWheels({0, 0.5}, dt);
   }
   if ((pos - p1_).norm() < explore_.goal_tolerance_m) {
     const double err = NormalizeAngle(p1_heading_ - me.theta);
@@ -336,8 +412,13 @@ WheelCommand Mission::StepContour(double t, double dt, const slam::Slam& slam, c
       }
     }
   }
-  if (contour_turned_ < -2 * M_PI - 0.6) {
-    // Walked all round it and it is still open: say so and carry on.
+  if (contour_turned_ < -2 * M_PI - 0.3) {
+    // Walked all round it. With three sides mapped the fourth is where the robot
+    // just went round: the model closes it; with fewer, say so and carry on.
+    if (modeler_.CloseByContour(target_)) {
+      Enter(MissionState::kModel, t, "object " + std::to_string(target_) + " complete (contour closed)");
+      return Halt();
+    }
     modeler_.GiveUp(target_, "contour followed all round, still incomplete");
     Enter(MissionState::kModel, t, "object " + std::to_string(target_) + " incomplete after a full contour");
     return Halt();

@@ -49,6 +49,8 @@ struct ExploreOptions {
   double front_stop_m = 0.32;         // unmapped obstacle ahead while going to P1: stop, replan
   double go_to_timeout_s = 90;        // give the object up if P1 is not reached by then
   double contour_timeout_s = 150;     // give up completing an object after this
+  bool survey_centre = true;          // once: go to the room's centre and look round, to find
+                                      // free objects too far from the walls to be seen
 };
 
 class Mission {
@@ -62,8 +64,9 @@ class Mission {
   void SetFault(double t, const std::string& reason);
   void ClearFault(double t);
 
-  // One control period: returns the wheel command.
-  WheelCommand Step(double t, const slam::Slam& slam, const RangeScan& scan, bool bumped);
+  // One control period: returns the wheel command. bumpers: CTRL_STATUS.Bumpers bits
+  // (bit0 left, bit1 right).
+  WheelCommand Step(double t, const slam::Slam& slam, const RangeScan& scan, uint8_t bumpers);
 
   MissionState state() const { return state_; }
   const std::string& reason() const { return reason_; }
@@ -96,13 +99,18 @@ class Mission {
   double follow_distance_m_;
   WallFollower follower_;
   Modeler modeler_;
-  int target_ = 0;                     // object being completed
+  int target_ = 0;                     // object being completed (0: the survey)
+  bool survey_done_ = false;
+  double survey_turned_ = -1;          // >= 0 while turning round at the survey point
   Eigen::Vector2d p1_ = Eigen::Vector2d::Zero();  // internal frame
   double p1_heading_ = 0;
   std::vector<Eigen::Vector2d> path_;
+  std::vector<Eigen::Vector2d> bump_points_;  // where bumpers hit something (internal frame)
   double state_since_ = 0;
   double last_plan_ = -1e9;
   double backoff_until_ = -1e9;
+  uint8_t backoff_bumpers_ = 0;
+  uint8_t bumpers_now_ = 0;
   int windows_seen_ = 0;
   double contour_turned_ = 0;
   double last_theta_ = 0;

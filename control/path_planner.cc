@@ -37,6 +37,7 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
     return std::pair<int, int>{static_cast<int>(std::lround((p.x() - lo.x()) / o.resolution_m)),
                                static_cast<int>(std::lround((p.y() - lo.y()) / o.resolution_m))};
   };
+  // 0 free, 1 within the inflation (soft), 2 within hard_m.
   std::vector<uint8_t> blocked(static_cast<size_t>(nx * ny), 0);
   for (const auto& ob : obstacles) {
     // Only cells near the obstacle's bounding box can be blocked by it.
@@ -46,7 +47,13 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
     const auto [x1, y1] = cell(b);
     for (int ix = std::max(0, x0); ix <= std::min(nx - 1, x1); ++ix) {
       for (int iy = std::max(0, y0); iy <= std::min(ny - 1, y1); ++iy) {
-        if (SegmentDistance(centre(ix, iy), ob) < o.inflation_m) blocked[static_cast<size_t>(iy * nx + ix)] = 1;
+        const double d = SegmentDistance(centre(ix, iy), ob);
+        auto& cellb = blocked[static_cast<size_t>(iy * nx + ix)];
+        if (d < o.hard_m) {
+          cellb = 2;
+        } else if (d < o.inflation_m) {
+          cellb = std::max<uint8_t>(cellb, 1);
+        }
       }
     }
   }
@@ -73,8 +80,11 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
       const int jx = ix + dx[k], jy = iy + dy[k];
       if (jx < 0 || jy < 0 || jx >= nx || jy >= ny) continue;
       const int j = jy * nx + jx;
-      // Leaving a blocked start is allowed, entering blocked cells is not.
-      if (blocked[static_cast<size_t>(j)]) continue;
+      // Soft-blocked cells may be crossed only near the start (to get out of a
+      // tight spot); hard-blocked cells never.
+      const uint8_t b = blocked[static_cast<size_t>(j)];
+      if (b == 2) continue;
+      if (b == 1 && std::hypot(jx - sx, jy - sy) * o.resolution_m > o.inflation_m + o.resolution_m) continue;
       const double c = g[static_cast<size_t>(i)] + (k < 4 ? 1.0 : M_SQRT2);
       if (c < g[static_cast<size_t>(j)]) {
         g[static_cast<size_t>(j)] = c;

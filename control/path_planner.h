@@ -13,6 +13,9 @@ namespace irslam::control {
 struct PlannerOptions {
   double resolution_m = 0.05;
   double inflation_m = 0.25;  // robot radius + clearance
+  double hard_m = 0.19;       // never closer than this (robot radius + a little): near the
+                              // start, cells between hard_m and inflation_m may be crossed
+                              // to get out of a tight spot
   double margin_m = 1.0;      // grid extends this far beyond the obstacles
 };
 

@@ -37,7 +37,7 @@ void RobotCore::OnFrame(const can_frame& frame, double now_s) {
     slam_.AddRangeScan(scan_);
   }
   if (ev.status) {
-    bumped_ = ev.status->bumpers != 0;
+    bumpers_ = ev.status->bumpers;
   }
 }
 
@@ -52,7 +52,7 @@ std::vector<can_frame> RobotCore::Tick(double now_s) {
   } else if (alive && mission_.state() == MissionState::kFault) {
     mission_.ClearFault(now_s);
   }
-  last_cmd_ = mission_.Step(now_s, slam_, scan_, bumped_);
+  last_cmd_ = mission_.Step(now_s, slam_, scan_, bumpers_);
   out.push_back(motor_.MakeCommand(last_cmd_));
   if (now_s - last_heartbeat_ >= options_.heartbeat_period_s - 1e-9) {
     last_heartbeat_ = now_s;

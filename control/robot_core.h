@@ -65,7 +65,7 @@ class RobotCore {
   Mission mission_;
   RangeScan scan_;
   std::array<uint16_t, kNumIrSensors> last_adc_{};
-  bool bumped_ = false;
+  uint8_t bumpers_ = 0;
   bool ever_alive_ = false;
   double last_heartbeat_ = -1e9;
   WheelCommand last_cmd_;

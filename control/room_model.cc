@@ -38,6 +38,18 @@ int EnvironmentModel::pending() const {
   return n;
 }
 
+bool Modeler::CloseByContour(int object_id) {
+  for (auto& o : model_.objects) {
+    if (o.id != object_id) continue;
+    if (o.lines.size() < 3) return false;
+    closed_by_contour_.push_back(object_id);
+    o.complete = true;
+    o.note = "one side inferred from the contour";
+    return true;
+  }
+  return false;
+}
+
 void Modeler::GiveUp(int object_id, const std::string& why) {
   given_up_.emplace_back(object_id, why);
   for (auto& o : model_.objects) {
@@ -197,7 +209,6 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
         obj.open_ends += closed ? 0 : 1;
       }
     }
-    b = Box{b.xmin, b.ymin, b.xmax, b.ymax};
     const bool box_at_wall = m.room.box && (std::abs(b.xmin - m.room.box->xmin) < o.wall_contact_m ||
                                             std::abs(b.xmax - m.room.box->xmax) < o.wall_contact_m ||
                                             std::abs(b.ymin - m.room.box->ymin) < o.wall_contact_m ||
@@ -231,6 +242,12 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
       obj.id = model_.objects[static_cast<size_t>(best_k)].id;
     } else {
       obj.id = next_id_++;
+    }
+    for (int cid : closed_by_contour_) {
+      if (cid == obj.id && !obj.complete && obj.lines.size() >= 3) {
+        obj.complete = true;
+        obj.note = "one side inferred from the contour";
+      }
     }
     for (const auto& [gid, why] : given_up_) {
       if (gid == obj.id && !obj.complete) {

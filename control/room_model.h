@@ -20,7 +20,8 @@ namespace irslam::control {
 struct ModelOptions {
   double axis_tolerance_rad = 0.12;  // lines this close to an axis count as axis-aligned
   double collinear_m = 0.08;         // pieces of one wall/side: offsets within this
-  double corner_m = 0.20;            // two sides meet: their corner within this of both ends
+  double corner_m = 0.35;            // two sides meet: their corner within this of an end
+                                     // (gaps narrower than the robot are not passable anyway)
   double wall_contact_m = 0.15;      // an object this close to a wall touches it
 };
 
@@ -65,6 +66,10 @@ class Modeler {
   // which side each line was seen. Object ids persist across calls.
   const EnvironmentModel& Update(const std::vector<slam::LineFeature>& lines,
                                  const std::vector<slam::TrajectoryPoint>& trajectory);
+  // The robot has followed the object's contour all round: if at least three of
+  // its sides are mapped, the missing one is inferred from their extents and the
+  // object counts as complete (noted). False if fewer sides are known.
+  bool CloseByContour(int object_id);
   // Marks an object as not completable (e.g. unreachable); it stays incomplete.
   void GiveUp(int object_id, const std::string& why);
   const EnvironmentModel& model() const { return model_; }
@@ -74,6 +79,7 @@ class Modeler {
   EnvironmentModel model_;
   int next_id_ = 1;
   std::vector<std::pair<int, std::string>> given_up_;
+  std::vector<int> closed_by_contour_;
 };
 
 }  // namespace irslam::control

@@ -186,6 +186,12 @@ void ReadMission(const json& j, control::CoreOptions* o, std::string* e) {
   s.Finish();
 }
 
+void ReadBool(const json& j, const char* key, bool* out, Section* s) {
+  if (!j.is_object() || !j.contains(key)) return;
+  if (!j.at(key).is_boolean()) return s->Fail(key, "must be true or false");
+  *out = j.at(key).get<bool>();
+}
+
 void ReadExploration(const json& j, control::CoreOptions* o, std::string* e) {
   Section s(j, "exploration", e);
   auto& x = o->explore;
@@ -199,6 +205,8 @@ void ReadExploration(const json& j, control::CoreOptions* o, std::string* e) {
   s.Num("front_stop_m", &x.front_stop_m, 0.1, 2);
   s.Num("go_to_timeout_s", &x.go_to_timeout_s, 1, 3600);
   s.Num("contour_timeout_s", &x.contour_timeout_s, 1, 3600);
+  ReadBool(j, "survey_centre", &x.survey_centre, &s);
+  s.Num("survey_centre", nullptr, 0, 0);
   s.Finish();
 }
 
@@ -212,11 +220,6 @@ void ReadModel(const json& j, control::CoreOptions* o, std::string* e) {
   s.Finish();
 }
 
-void ReadBool(const json& j, const char* key, bool* out, Section* s) {
-  if (!j.is_object() || !j.contains(key)) return;
-  if (!j.at(key).is_boolean()) return s->Fail(key, "must be true or false");
-  *out = j.at(key).get<bool>();
-}
 
 void ReadSlam(const json& j, control::CoreOptions* o, std::string* e) {
   Section s(j, "slam", e);
@@ -347,7 +350,8 @@ std::string DumpConfig(const control::CoreOptions& o) {
                        {"cruise_speed_mps", ex.cruise_speed_mps}, {"lookahead_m", ex.lookahead_m},
                        {"k_heading", ex.k_heading}, {"replan_period_s", ex.replan_period_s},
                        {"front_stop_m", ex.front_stop_m}, {"go_to_timeout_s", ex.go_to_timeout_s},
-                       {"contour_timeout_s", ex.contour_timeout_s}}},
+                       {"contour_timeout_s", ex.contour_timeout_s},
+                       {"survey_centre", ex.survey_centre}}},
       {"model", {{"axis_tolerance_rad", mo.axis_tolerance_rad}, {"collinear_m", mo.collinear_m},
                  {"corner_m", mo.corner_m}, {"wall_contact_m", mo.wall_contact_m}}},
       {"robot", {{"wheel_base_m", g.wheel_base_m}, {"wheel_radius_m", g.wheel_radius_m},

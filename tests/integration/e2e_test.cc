@@ -122,7 +122,7 @@ TEST_F(E2eTest, FollowsTheWholePerimeterOverTheBusAndReturnsToItsStart) {
   double follow_t = -1, last_t = -1, last_dist = -1;
   uint64_t last_enc = 0;
   int advances = 0;
-  const auto end = Clock::now() + std::chrono::seconds(40);
+  const auto end = Clock::now() + std::chrono::seconds(80);
   while (Clock::now() < end) {
     auto s = Status();
     ASSERT_TRUE(s);
@@ -136,7 +136,8 @@ TEST_F(E2eTest, FollowsTheWholePerimeterOverTheBusAndReturnsToItsStart) {
     last_dist = (*s)["distance"];
     last_enc = (*s)["frames"]["encoder"];
     if ((*s)["state"] == "done") break;
-    EXPECT_TRUE((*s)["state"] == "wall_follow" || (*s)["state"] == "model") << s->dump();
+    EXPECT_NE((*s)["state"], "fault") << s->dump();
+    EXPECT_NE((*s)["state"], "idle") << s->dump();
     Sleep(0.25);
   }
   auto final_status = Status();
