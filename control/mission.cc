@@ -207,6 +207,10 @@ Eigen::Vector2d Rotate(const Eigen::Vector2d& v, double a) {
 WheelCommand Mission::StepModel(double t, const slam::Slam& slam) {
   // Paper §5: model the room from the line map, then complete what is incomplete.
   const EnvironmentModel& m = modeler_.Update(slam.map_lines(), slam.map_trajectory());
+  if (!options_.explore) {
+    Enter(MissionState::kDone, t, "room modelled (exploration off)");
+    return Halt();
+  }
   if (m.pending() == 0 && explore_.survey_centre && !survey_done_ && m.room.box) {
     // Free objects far from every wall were never within range: look from the
     // middle of the room once (the free cell nearest its centre).

@@ -36,6 +36,7 @@ struct MissionOptions {
   double loop_close_angle_rad = 0.7;
   double max_accel_mps2 = 0.8;       // wheel acceleration limit of the command
   int wall_follow_loops = 1;         // loops of the room before modelling (Fig. 18: 5)
+  bool explore = true;               // false: model after wall following and stop (map only)
 };
 
 struct ExploreOptions {

@@ -173,6 +173,12 @@ void ReadWallFollow(const json& j, control::CoreOptions* o, std::string* e) {
   s.Finish();
 }
 
+void ReadBool(const json& j, const char* key, bool* out, Section* s) {
+  if (!j.is_object() || !j.contains(key)) return;
+  if (!j.at(key).is_boolean()) return s->Fail(key, "must be true or false");
+  *out = j.at(key).get<bool>();
+}
+
 void ReadMission(const json& j, control::CoreOptions* o, std::string* e) {
   Section s(j, "mission", e);
   auto& m = o->mission;
@@ -183,14 +189,11 @@ void ReadMission(const json& j, control::CoreOptions* o, std::string* e) {
   s.Num("loop_close_angle_rad", &m.loop_close_angle_rad, 0.01, 3.2);
   s.Num("max_accel_mps2", &m.max_accel_mps2, 0.01, 20);
   s.Int("wall_follow_loops", &m.wall_follow_loops, 1, 100);
+  ReadBool(j, "explore", &m.explore, &s);
+  s.Num("explore", nullptr, 0, 0);
   s.Finish();
 }
 
-void ReadBool(const json& j, const char* key, bool* out, Section* s) {
-  if (!j.is_object() || !j.contains(key)) return;
-  if (!j.at(key).is_boolean()) return s->Fail(key, "must be true or false");
-  *out = j.at(key).get<bool>();
-}
 
 void ReadExploration(const json& j, control::CoreOptions* o, std::string* e) {
   Section s(j, "exploration", e);
@@ -379,7 +382,8 @@ std::string DumpConfig(const control::CoreOptions& o) {
                    {"loop_close_radius_m", m.loop_close_radius_m},
                    {"loop_close_angle_rad", m.loop_close_angle_rad},
                    {"max_accel_mps2", m.max_accel_mps2},
-                   {"wall_follow_loops", m.wall_follow_loops}}},
+                   {"wall_follow_loops", m.wall_follow_loops},
+                   {"explore", m.explore}}},
       {"slam", {{"trajectory_period_s", o.slam.trajectory_period_s},
                 {"var_per_m", o.slam.motion_noise.var_per_m},
                 {"var_theta_per_rad", o.slam.motion_noise.var_theta_per_rad},
