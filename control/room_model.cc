@@ -41,8 +41,9 @@ int EnvironmentModel::pending() const {
 bool Modeler::CloseByContour(int object_id) {
   for (auto& o : model_.objects) {
     if (o.id != object_id) continue;
-    if (o.lines.size() < 3) return false;
+    // Remembered either way: a third side found later still closes it.
     closed_by_contour_.push_back(object_id);
+    if (o.lines.size() < 3) return false;
     o.complete = true;
     o.note = "one side inferred from the contour";
     return true;
@@ -140,8 +141,14 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
                         (v.c > h.a0 && v.c < h.a1);
     const bool near_v = std::min(std::abs(h.c - v.a0), std::abs(h.c - v.a1)) < o.corner_m ||
                         (h.c > v.a0 && h.c < v.a1);
-    return near_h && near_v && (std::min(std::abs(v.c - h.a0), std::abs(v.c - h.a1)) < o.corner_m ||
-                                std::min(std::abs(h.c - v.a0), std::abs(h.c - v.a1)) < o.corner_m);
+    const double end_h = std::min(std::abs(v.c - h.a0), std::abs(v.c - h.a1));
+    const double end_v = std::min(std::abs(h.c - v.a0), std::abs(h.c - v.a1));
+    if (near_h && near_v && (end_h < o.corner_m || end_v < o.corner_m)) return true;
+    // One side ends right at the corner, the other was seen short of it (its end
+    // passed on a corner arc): still one object.
+    const double tight = 0.1, loose = 1.5 * o.corner_m;
+    return (end_h < tight && (end_v < loose || (h.c > v.a0 && h.c < v.a1))) ||
+           (end_v < tight && (end_h < loose || (v.c > h.a0 && v.c < h.a1)));
   };
   for (size_t i = 0; i < rest.size(); ++i) {
     for (size_t j = i + 1; j < rest.size(); ++j) {
@@ -251,6 +258,7 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
     }
     for (const auto& [gid, why] : given_up_) {
       if (gid == obj.id && !obj.complete) {
+        // (A contoured object that has since been closed is not given up.)
         obj.given_up = true;
         obj.note = why;
       }
