@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace irslam::control {
 
@@ -348,7 +349,20 @@ WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, cons
   }
   const Pose2 me = slam.pose();
   const Eigen::Vector2d pos(me.x, me.y);
-  const auto front = follower_.FrontDistance(scan);
+  // Anything any sensor sees close ahead (not only the front ones: a box corner
+  // can sit between the beams of the front sensors) stops the robot and makes it
+  // plan around what it sees.
+  std::optional<double> front = follower_.FrontDistance(scan);
+  for (int i = 0; i < kNumIrSensors; ++i) {
+    if (!scan.range_m[i]) continue;
+    const auto& m = mounts_[i];
+    const double hx = m.x + *scan.range_m[i] * std::cos(m.theta);
+    const double hy = m.y + *scan.range_m[i] * std::sin(m.theta);
+    if (hx > 0 && std::hypot(hx, hy) < geometry_.radius_m + 0.12) {
+      const double d = std::hypot(hx, hy) + 0.1;
+      if (!front || d < *front) front = d;
+    }
+  }
   if ((front && *front < explore_.front_stop_m) || t - last_plan_ > explore_.replan_period_s) {
     last_plan_ = t;
     if (!Replan(slam, scan) && front && *front < explore_.front_stop_m) {

@@ -337,6 +337,27 @@ TEST_F(E2eTest, CtlWaitAndMapWork) {
   EXPECT_EQ(nlohmann::json::parse(out)["state"], "idle");
 }
 
+TEST_F(E2eTest, WholeMissionOverTheBusEndsDoneWithTheRoomModelled) {
+  StartAll("fig14.json");
+  std::string out;
+  ASSERT_EQ(Ctl({"start"}, &out), 0) << out;
+  // ~290 s of robot time at 10x (docs/accuracy.md); generous for a loaded machine.
+  EXPECT_EQ(Ctl({"wait", "--state", "done", "--timeout", "120"}, &out), 0) << out;
+  ASSERT_EQ(Ctl({"map", "--out", dir_ + "/map.json", "--svg", dir_ + "/map.svg"}, &out), 0) << out;
+  std::string error;
+  auto m = ParseJsonText(testing::ReadFile(dir_ + "/map.json"), &error);
+  ASSERT_TRUE(m) << error;
+  EXPECT_EQ((*m)["state"], "done");
+  ASSERT_TRUE((*m)["room"]["box"].is_array());
+  for (const char* wall : {"bottom", "right", "top", "left"}) EXPECT_FALSE((*m)["room"]["walls"][wall].empty()) << wall;
+  int wall_contact = 0, free_objects = 0;
+  for (const auto& o : (*m)["objects"]) (o["kind"] == "free" ? free_objects : wall_contact)++;
+  EXPECT_EQ(wall_contact, 1);
+  EXPECT_EQ(free_objects, 2);
+  const nlohmann::json truth = StopSimAndReadTruth();
+  EXPECT_EQ(truth["collisions"], 0);
+}
+
 TEST(CommandLineTest, BadConfigAndWorldFilesGiveOneLineAndStatus2) {
   const std::string dir = testing::MakeTempDir();
   {

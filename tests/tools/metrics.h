@@ -6,6 +6,7 @@
 #ifndef IRSLAM_TESTS_TOOLS_METRICS_H_
 #define IRSLAM_TESTS_TOOLS_METRICS_H_
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,15 @@ Pose2 BestAlignment(const std::vector<slam::LineFeature>& lines, const Pose2& st
                     const sim::World& world);
 // Applies a correction from BestAlignment to the start pose used for comparisons.
 Pose2 CorrectStart(const Pose2& start, const Pose2& correction);
+
+// Objects of a map (contracts §4) against the true furniture: touching boxes form
+// one compound piece; a piece touching a wall is wall-contact.
+struct ObjectScores {
+  int pieces = 0, found = 0, kind_right = 0, complete = 0, extra = 0;
+  double max_edge_m = 0;  // largest box-edge error over complete found pieces (wall sides excluded)
+  double mean_iou = 0;
+};
+ObjectScores ScoreObjects(const nlohmann::json& map, const slam::Slam& slam, const sim::World& world);
 
 }  // namespace irslam::metrics
 

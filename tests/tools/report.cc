@@ -200,84 +200,13 @@ int main(int argc, char** argv) {
           "max edge error | mean IoU | extra objects |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const std::string name : {"fig14", "fig16", "fig19", "fig20"}) {
       const sim::World world = load(name);
-      // True pieces: union of touching boxes.
-      std::vector<sim::Box> pieces;
-      std::vector<bool> used(world.objects.size(), false);
-      for (size_t i = 0; i < world.objects.size(); ++i) {
-        if (used[i]) continue;
-        sim::Box b = world.objects[i];
-        used[i] = true;
-        for (bool grew = true; grew;) {
-          grew = false;
-          for (size_t k = 0; k < world.objects.size(); ++k) {
-            const auto& c = world.objects[k];
-            if (used[k] || c.xmin > b.xmax + 1e-6 || c.xmax < b.xmin - 1e-6 || c.ymin > b.ymax + 1e-6 ||
-                c.ymax < b.ymin - 1e-6) {
-              continue;
-            }
-            b = {std::min(b.xmin, c.xmin), std::min(b.ymin, c.ymin), std::max(b.xmax, c.xmax), std::max(b.ymax, c.ymax)};
-            used[k] = grew = true;
-          }
-        }
-        pieces.push_back(b);
-      }
-      const sim::Box room = world.Bounds();
       for (int s = 1; s <= seeds; ++s) {
         sim::InProcessRun run = sim::RunInProcess(world, with_exploration, static_cast<uint64_t>(s), 900);
-        const auto& slam = run.core->slam();
-        const Pose2 fixed = metrics::CorrectStart(world.start, metrics::BestAlignment(slam.lines(), world.start, world));
-        const double rot = slam.map_rotation();
-        const nlohmann::json map = run.core->Map();
-        int found = 0, kind_ok = 0, complete = 0, extra = 0;
-        double max_edge = 0, iou_sum = 0;
-        std::vector<bool> matched(pieces.size(), false);
-        for (const auto& o : map["objects"]) {
-          // Map-frame box -> world box.
-          double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
-          for (int cx = 0; cx < 2; ++cx) {
-            for (int cy = 0; cy < 2; ++cy) {
-              const double mx = o["box"][cx ? 2 : 0], my = o["box"][cy ? 3 : 1];
-              const double ix = std::cos(-rot) * mx - std::sin(-rot) * my, iy = std::sin(-rot) * mx + std::cos(-rot) * my;
-              const Pose2 w = Compose(fixed, {ix, iy, 0});
-              x0 = std::min(x0, w.x), x1 = std::max(x1, w.x), y0 = std::min(y0, w.y), y1 = std::max(y1, w.y);
-            }
-          }
-          int best = -1;
-          double best_iou = 0;
-          for (size_t k = 0; k < pieces.size(); ++k) {
-            const auto& p = pieces[k];
-            const double ix = std::min(x1, p.xmax) - std::max(x0, p.xmin), iy = std::min(y1, p.ymax) - std::max(y0, p.ymin);
-            const double inter = std::max(0.0, ix) * std::max(0.0, iy);
-            const double uni = (x1 - x0) * (y1 - y0) + (p.xmax - p.xmin) * (p.ymax - p.ymin) - inter;
-            const double iou = uni > 0 ? inter / uni : 0;
-            // A line-only object has no area: count it by proximity.
-            const bool near = ix > -0.05 && iy > -0.05;
-            if ((iou > best_iou || (best < 0 && near)) && !matched[k]) {
-              best_iou = iou;
-              best = static_cast<int>(k);
-            }
-          }
-          if (best < 0) {
-            ++extra;
-            continue;
-          }
-          matched[static_cast<size_t>(best)] = true;
-          const auto& p = pieces[static_cast<size_t>(best)];
-          ++found;
-          const bool wall = p.xmin < room.xmin + 0.05 || p.ymin < room.ymin + 0.05 || p.xmax > room.xmax - 0.05 ||
-                            p.ymax > room.ymax - 0.05;
-          kind_ok += (o["kind"] == "wall_contact") == wall;
-          complete += o["complete"].get<bool>();
-          // Edges: a wall-contact piece's wall side is never seen; skip it.
-          const double e[4] = {p.xmin < room.xmin + 0.05 ? 0 : std::abs(x0 - p.xmin), p.ymin < room.ymin + 0.05 ? 0 : std::abs(y0 - p.ymin),
-                               p.xmax > room.xmax - 0.05 ? 0 : std::abs(x1 - p.xmax), p.ymax > room.ymax - 0.05 ? 0 : std::abs(y1 - p.ymax)};
-          if (o["complete"].get<bool>()) max_edge = std::max({max_edge, e[0], e[1], e[2], e[3]});
-          iou_sum += best_iou;
-        }
+        const metrics::ObjectScores sc = metrics::ScoreObjects(run.core->Map(), run.core->slam(), world);
         md << "| " << name << " | " << s << " | " << (run.core->state() == control::MissionState::kDone ? "yes" : "**no**")
-           << " | " << F(run.t) << " | " << run.sim->collisions() << " | " << pieces.size() << " | " << found << " | "
-           << kind_ok << " | " << complete << " | " << F(max_edge * 100) << " | " << F(found ? iou_sum / found : 0, 2)
-           << " | " << extra << " |\n";
+           << " | " << F(run.t) << " | " << run.sim->collisions() << " | " << sc.pieces << " | " << sc.found
+           << " | " << sc.kind_right << " | " << sc.complete << " | " << F(sc.max_edge_m * 100) << " | "
+           << F(sc.mean_iou, 2) << " | " << sc.extra << " |\n";
       }
     }
     md << "\n";
