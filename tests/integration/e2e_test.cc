@@ -1,6 +1,9 @@
 // Integration tests with the real processes: irslam-sim serve + irslamd + irslamctl
 // over the loopback bus (vcan0 when IRSLAM_TEST_CAN=vcan0), time-scaled.
 #include <signal.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -8,12 +11,15 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <sstream>
 #include <thread>
 
 #include "daemon/rpc_client.h"
 #include "proto/codec.h"
 #include "proto/json_text.h"
 #include "tests/testing/bus_tap.h"
+#include "tests/testing/dbc.h"
 #include "tests/testing/process.h"
 
 namespace irslam {
@@ -356,6 +362,103 @@ TEST_F(E2eTest, WholeMissionOverTheBusEndsDoneWithTheRoomModelled) {
   EXPECT_EQ(free_objects, 2);
   const nlohmann::json truth = StopSimAndReadTruth();
   EXPECT_EQ(truth["collisions"], 0);
+}
+
+TEST_F(E2eTest, SighupReloadsAGoodConfigAndKeepsTheOldOneOnABadOne) {
+  const std::string conf = dir_ + "/irslamd.conf";
+  std::ofstream(conf) << R"({"control": {"period_s": 0.02}})";
+  ASSERT_TRUE(sim_.Start({kSim, "serve", "--can", bus_, "--world", kSrc + "/tests/worlds/fig14.json",
+                          "--time-scale", "10"}, dir_ + "/sim.log"));
+  ASSERT_TRUE(daemon_.Start({kDaemon, "--can", bus_, "--socket", socket_, "--time-scale", "10",
+                             "--config", conf}, dir_ + "/daemon.log"));
+  std::optional<nlohmann::json> s;
+  for (int i = 0; i < 100 && !(s = Status()); ++i) Sleep(0.05);
+  ASSERT_TRUE(s);
+  EXPECT_DOUBLE_EQ((*s)["period"]["target"].get<double>(), 0.02);
+  std::ofstream(conf) << R"({"control": {"period_s": "fast"}})";
+  daemon_.Signal(SIGHUP);
+  Sleep(0.3);
+  s = Status();
+  ASSERT_TRUE(s) << "the daemon died on a bad reload";
+  EXPECT_DOUBLE_EQ((*s)["period"]["target"].get<double>(), 0.02);
+  EXPECT_NE(testing::ReadFile(dir_ + "/daemon.log").find("reload failed, keeping the running config"),
+            std::string::npos);
+  std::ofstream(conf) << R"({"control": {"period_s": 0.01}})";
+  daemon_.Signal(SIGHUP);
+  Sleep(0.3);
+  s = Status();
+  ASSERT_TRUE(s);
+  EXPECT_DOUBLE_EQ((*s)["period"]["target"].get<double>(), 0.01);  // idle: applied at once
+}
+
+TEST_F(E2eTest, TellsSystemdReadyStatusAndFeedsTheWatchdog) {
+  // A stand-in for systemd's notify socket.
+  const std::string notify = dir_ + "/notify.sock";
+  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", notify.c_str());
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  timeval tv{0, 200000};
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  ASSERT_TRUE(sim_.Start({kSim, "serve", "--can", bus_, "--world", kSrc + "/tests/worlds/fig14.json",
+                          "--time-scale", "10"}, dir_ + "/sim.log"));
+  ASSERT_TRUE(daemon_.Start({kDaemon, "--can", bus_, "--socket", socket_, "--time-scale", "10"},
+                            dir_ + "/daemon.log",
+                            {"NOTIFY_SOCKET=" + notify, "WATCHDOG_USEC=200000"}));
+  std::string all;
+  const auto end = Clock::now() + std::chrono::seconds(5);
+  int watchdogs = 0;
+  while (Clock::now() < end && watchdogs < 3) {
+    char buf[512];
+    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+    if (n <= 0) continue;
+    const std::string msg(buf, static_cast<size_t>(n));
+    all += msg + "\n";
+    if (msg.find("WATCHDOG=1") != std::string::npos) ++watchdogs;
+  }
+  ::close(fd);
+  EXPECT_NE(all.find("READY=1"), std::string::npos) << all;
+  EXPECT_NE(all.find("STATUS=state=idle"), std::string::npos) << all;
+  EXPECT_GE(watchdogs, 3) << all;
+  daemon_.Signal(SIGTERM);
+  EXPECT_EQ(daemon_.Wait(5), 0);
+}
+
+TEST_F(E2eTest, CandumpLogOfTheBusDecodesWithTheDbc) {
+  StartAll();
+  ASSERT_EQ(Ctl({"start"}), 0);
+  std::string out;
+  ASSERT_EQ(RunCommand({kBin + "/daemon/irslam-candump", bus_, "-n", "400"}, &out, 30), 0) << out;
+  const auto dbc = testing::ParseDbc(kSrc + "/proto/irslam.dbc");
+  std::istringstream lines(out);
+  std::string line;
+  int n = 0;
+  std::map<std::string, int> by_name;
+  while (std::getline(lines, line)) {
+    // "(1700000000.123456) loopback 110#3412CDAB01007F"
+    std::istringstream ls(line);
+    std::string stamp, iface, text;
+    ls >> stamp >> iface >> text;
+    can_frame f;
+    ASSERT_TRUE(proto::ParseCandumpString(text, &f)) << line;
+    bool known = false;
+    for (const auto& [name, m] : dbc) {
+      if (m.id != f.can_id) continue;
+      known = true;
+      EXPECT_EQ(m.dlc, f.can_dlc) << line;
+      for (const auto& [sig, spec] : m.signals) {
+        const double v = testing::DbcDecode(f, spec);
+        EXPECT_GE(v, spec.min - 1e-9) << line << " " << sig;
+        EXPECT_LE(v, spec.max + 1e-9) << line << " " << sig;
+      }
+      ++by_name[name];
+    }
+    EXPECT_TRUE(known) << line;
+    ++n;
+  }
+  EXPECT_EQ(n, 400);
+  for (const char* name : {"WHEEL_CMD", "CTRL_STATUS", "ENCODER", "IR_A", "IR_B"}) EXPECT_GT(by_name[name], 0) << name;
 }
 
 TEST(CommandLineTest, BadConfigAndWorldFilesGiveOneLineAndStatus2) {

@@ -20,7 +20,8 @@ Process::~Process() {
   }
 }
 
-bool Process::Start(const std::vector<std::string>& argv, const std::string& log_path) {
+bool Process::Start(const std::vector<std::string>& argv, const std::string& log_path,
+                    const std::vector<std::string>& extra_env) {
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
@@ -33,6 +34,7 @@ bool Process::Start(const std::vector<std::string>& argv, const std::string& log
       ::dup2(fd, 2);
       ::close(fd);
     }
+    for (const auto& kv : extra_env) ::putenv(const_cast<char*>(kv.c_str()));
     ::execv(args[0], args.data());
     _exit(127);
   }

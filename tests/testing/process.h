@@ -18,7 +18,8 @@ class Process {
   Process& operator=(const Process&) = delete;
 
   // Starts argv[0] with arguments; stdout and stderr go to log_path (appended).
-  bool Start(const std::vector<std::string>& argv, const std::string& log_path);
+  bool Start(const std::vector<std::string>& argv, const std::string& log_path,
+             const std::vector<std::string>& extra_env = {});
   bool Signal(int signo);
   // Waits up to timeout_s; returns the exit status (128+signal if killed by one).
   std::optional<int> Wait(double timeout_s);
