@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Checks systemd/irslamd.service: `systemd-analyze verify` is clean and the
+# offline security exposure is at most 3.0 (docs/systemd.md records the score).
+set -euo pipefail
+src=$1
+bin=$2
+command -v systemd-analyze >/dev/null || { echo "systemd-analyze missing"; exit 1; }
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+# The unit names /usr/bin/irslamd; point it at the build's binary for the check.
+sed "s|/usr/bin/irslamd|$bin/daemon/irslamd|" "$src/systemd/irslamd.service" > "$tmp/irslamd.service"
+out=$(systemd-analyze verify "$tmp/irslamd.service" 2>&1 || true)
+if [ -n "$out" ]; then
+  echo "systemd-analyze verify: $out"
+  exit 1
+fi
+score=$(systemd-analyze security --offline=true "$tmp/irslamd.service" 2>&1 |
+        sed -n 's/.*Overall exposure level for irslamd.service: \([0-9.]*\).*/\1/p')
+echo "exposure: $score"
+awk -v s="$score" 'BEGIN { exit !(s != "" && s <= 3.0) }'
+echo "1 passed, 0 failed"
