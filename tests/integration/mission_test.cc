@@ -34,7 +34,8 @@ TEST_P(PaperWorldTest, ReachesDoneFindingAndClassifyingEveryPieceWithoutTouching
     EXPECT_EQ(sc.kind_right, sc.pieces) << "seed " << seed;
     EXPECT_GE(sc.complete, 1) << "seed " << seed;
     // The map's objects all carry the contract's fields.
-    for (const auto& o : run.core->Map()["objects"]) {
+    const nlohmann::json map = run.core->Map();
+    for (const auto& o : map["objects"]) {
       EXPECT_TRUE(o["kind"] == "free" || o["kind"] == "wall_contact");
       EXPECT_EQ(o["box"].size(), 4u);
       EXPECT_TRUE(o["complete"].is_boolean());
