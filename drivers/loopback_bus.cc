@@ -40,7 +40,7 @@ bool MakeAddr(const std::string& path, sockaddr_un* addr, socklen_t* len) {
 }  // namespace
 
 LoopbackBus::LoopbackBus(boost::asio::io_context& io, std::string dir, std::vector<uint32_t> ids)
-    : dir_(std::move(dir)), ids_(std::move(ids)), descriptor_(io) {}
+    : DescriptorBus(io), dir_(std::move(dir)), ids_(std::move(ids)) {}
 
 LoopbackBus::~LoopbackBus() { Close(); }
 
@@ -79,21 +79,6 @@ bool LoopbackBus::Open(std::string* error) {
   descriptor_.assign(fd);
   open_ = true;
   return true;
-}
-
-void LoopbackBus::Start(FrameHandler handler) {
-  handler_ = std::move(handler);
-  WaitRead();
-}
-
-void LoopbackBus::WaitRead() {
-  if (!open_) return;
-  descriptor_.async_wait(boost::asio::posix::stream_descriptor::wait_read,
-                         [this](const boost::system::error_code& ec) {
-                           if (ec || !open_) return;
-                           Drain();
-                           WaitRead();
-                         });
 }
 
 bool LoopbackBus::Wanted(uint32_t id) const {

@@ -24,7 +24,7 @@ namespace irslam::drivers {
 
 SocketCanBus::SocketCanBus(boost::asio::io_context& io, std::string iface,
                            std::vector<uint32_t> ids)
-    : iface_(std::move(iface)), ids_(std::move(ids)), descriptor_(io) {}
+    : DescriptorBus(io), iface_(std::move(iface)), ids_(std::move(ids)) {}
 
 SocketCanBus::~SocketCanBus() { Close(); }
 
@@ -79,21 +79,6 @@ bool SocketCanBus::Open(std::string* error) {
   descriptor_.assign(fd);
   open_ = true;
   return true;
-}
-
-void SocketCanBus::Start(FrameHandler handler) {
-  handler_ = std::move(handler);
-  WaitRead();
-}
-
-void SocketCanBus::WaitRead() {
-  if (!open_) return;
-  descriptor_.async_wait(boost::asio::posix::stream_descriptor::wait_read,
-                         [this](const boost::system::error_code& ec) {
-                           if (ec || !open_) return;
-                           Drain();
-                           WaitRead();
-                         });
 }
 
 void SocketCanBus::SetLink(bool up, const char* why) {

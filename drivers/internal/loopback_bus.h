@@ -10,23 +10,50 @@
 
 namespace irslam::drivers {
 
-class LoopbackBus final : public CanBus {
+// What both backends share: a non-blocking fd on the io_context, drained of all
+// it holds each time it becomes readable.
+class DescriptorBus : public CanBus {
+ public:
+  explicit DescriptorBus(boost::asio::io_context& io) : descriptor_(io) {}
+  void Start(FrameHandler handler) override {
+    handler_ = std::move(handler);
+    WaitRead();
+  }
+  const CanStats& stats() const override { return stats_; }
+
+ protected:
+  // Reads until the fd would block, delivering frames to handler_.
+  virtual void Drain() = 0;
+  void WaitRead() {
+    if (!open_) return;
+    descriptor_.async_wait(boost::asio::posix::stream_descriptor::wait_read,
+                           [this](const boost::system::error_code& ec) {
+                             if (ec || !open_) return;
+                             Drain();
+                             WaitRead();
+                           });
+  }
+
+  boost::asio::posix::stream_descriptor descriptor_;
+  FrameHandler handler_;
+  CanStats stats_;
+  bool open_ = false;
+};
+
+class LoopbackBus final : public DescriptorBus {
  public:
   LoopbackBus(boost::asio::io_context& io, std::string dir, std::vector<uint32_t> ids);
   ~LoopbackBus() override;
 
   bool Open(std::string* error);
-  void Start(FrameHandler handler) override;
   bool Send(const can_frame& frame) override;
   void Close() override;
-  const CanStats& stats() const override { return stats_; }
   std::string name() const override { return "unix:" + dir_; }
 
  private:
   static constexpr size_t kMaxBatch = 64;
 
-  void WaitRead();
-  void Drain();
+  void Drain() override;
   void Flush();
   void SendBatch(const can_frame* frames, size_t count);
   void RefreshPeers();
@@ -34,45 +61,34 @@ class LoopbackBus final : public CanBus {
 
   std::string dir_;
   std::vector<uint32_t> ids_;
-  boost::asio::posix::stream_descriptor descriptor_;
-  FrameHandler handler_;
-  CanStats stats_;
   std::string own_name_;
   std::string own_path_;
   std::vector<std::string> peers_;
   double peers_mtime_ = 0;
   bool peers_valid_ = false;
-  bool open_ = false;
   std::vector<can_frame> pending_;
   bool flush_posted_ = false;
   std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);
 };
 
-class SocketCanBus final : public CanBus {
+class SocketCanBus final : public DescriptorBus {
  public:
   SocketCanBus(boost::asio::io_context& io, std::string iface, std::vector<uint32_t> ids);
   ~SocketCanBus() override;
 
   bool Open(std::string* error);
-  void Start(FrameHandler handler) override;
   bool Send(const can_frame& frame) override;
   void Close() override;
-  const CanStats& stats() const override { return stats_; }
   std::string name() const override { return iface_; }
 
  private:
-  void WaitRead();
-  void Drain();
+  void Drain() override;
   void HandleErrorFrame(const can_frame& f);
   void SetLink(bool up, const char* why);
 
   std::string iface_;
   std::vector<uint32_t> ids_;
-  boost::asio::posix::stream_descriptor descriptor_;
-  FrameHandler handler_;
-  CanStats stats_;
   uint32_t last_drop_count_ = 0;
-  bool open_ = false;
 };
 
 }  // namespace irslam::drivers

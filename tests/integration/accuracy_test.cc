@@ -4,17 +4,13 @@
 
 #include "control/robot_core.h"
 #include "tests/sim/sim_run.h"
+#include "tests/testing/worlds.h"
 #include "tests/tools/metrics.h"
 
 namespace irslam {
 namespace {
 
-sim::World Load(const std::string& name) {
-  std::string error;
-  auto w = sim::LoadWorldFile(std::string(IRSLAM_SOURCE_DIR) + "/tests/worlds/" + name + ".json", &error);
-  EXPECT_TRUE(w) << error;
-  return *w;
-}
+sim::World Load(const std::string& name) { return testing::LoadTestWorld(name); }
 
 std::vector<metrics::TimedPose> Truth(const nlohmann::json& arr) {
   std::vector<metrics::TimedPose> out;
