@@ -505,6 +505,38 @@ TEST_F(E2eTest, FrameSentWithCansendInDbcLayoutIsDecoded) {
   EXPECT_EQ(after["frames"]["wrong_dlc"].get<uint64_t>(), before["frames"]["wrong_dlc"].get<uint64_t>() + 1);
 }
 
+TEST_F(E2eTest, InterfaceDownAndUpIsSurvivedWithoutRestart) {
+  if (bus_.rfind("unix:", 0) == 0) {
+    GTEST_SKIP() << "needs a SocketCAN interface: runs in the VM suite (vcan-scripts/vm-test.sh)";
+  }
+  StartAll();
+  ASSERT_EQ(Ctl({"start"}), 0);
+  WaitRobotTime(Status().value()["robot_time"].get<double>() + 3);
+  std::string out;
+  ASSERT_EQ(RunCommand({"/sbin/ip", "link", "set", bus_, "down"}, &out), 0) << out;
+  // The daemon notices (sends fail with ENETDOWN, frames stop): fault, wheels zero.
+  bool faulted = false;
+  for (int i = 0; i < 100 && !faulted; ++i) {
+    auto s = Status();
+    faulted = s && (*s)["state"] == "fault" && (*s)["can"]["link_up"] == false &&
+              (*s)["command"][0] == 0.0 && (*s)["command"][1] == 0.0;
+    Sleep(0.05);
+  }
+  EXPECT_TRUE(faulted);
+  ASSERT_EQ(RunCommand({"/sbin/ip", "link", "set", bus_, "up"}, &out), 0) << out;
+  bool resumed = false;
+  for (int i = 0; i < 200 && !resumed; ++i) {
+    auto s = Status();
+    resumed = s && (*s)["state"] == "wall_follow" && (*s)["can"]["link_up"] == true;
+    Sleep(0.05);
+  }
+  EXPECT_TRUE(resumed) << "no recovery without a restart";
+  EXPECT_TRUE(daemon_.running());
+  const auto s = Status().value();
+  EXPECT_GE(s["can"]["link_down_events"].get<int>(), 1);
+  EXPECT_NE(s["reason"].get<std::string>().find("resumed after: controller lost"), std::string::npos) << s["reason"];
+}
+
 TEST(CommandLineTest, BadConfigAndWorldFilesGiveOneLineAndStatus2) {
   const std::string dir = testing::MakeTempDir();
   {
