@@ -537,6 +537,32 @@ TEST_F(E2eTest, InterfaceDownAndUpIsSurvivedWithoutRestart) {
   EXPECT_NE(s["reason"].get<std::string>().find("resumed after: controller lost"), std::string::npos) << s["reason"];
 }
 
+TEST_F(E2eTest, ErrorFramesAndKernelDropsAreCounted) {
+  if (bus_.rfind("unix:", 0) == 0 || ::access("/usr/bin/cansend", X_OK) != 0) {
+    GTEST_SKIP() << "needs SocketCAN and can-utils: runs in the VM suite (vcan-scripts/vm-test.sh)";
+  }
+  StartAll();
+  const auto before = Status().value();
+  std::string out;
+  // A bus-off error frame (CAN_ERR_FLAG | CAN_ERR_BUSOFF), as a controller would report it.
+  ASSERT_EQ(RunCommand({"/usr/bin/cansend", bus_, "20000040#0000000000000000"}, &out), 0) << out;
+  Sleep(0.3);
+  auto s = Status().value();
+  EXPECT_EQ(s["can"]["error_frames"].get<uint64_t>(), before["can"]["error_frames"].get<uint64_t>() + 1);
+  EXPECT_EQ(s["can"]["bus_off"].get<uint64_t>(), before["can"]["bus_off"].get<uint64_t>() + 1);
+  EXPECT_EQ(s["can"]["last_error"], "bus-off");
+  // A reader that falls behind: the daemon is stopped while 3000 frames of one of
+  // its ids arrive; the kernel's drop counter (SO_RXQ_OVFL) then shows up in
+  // status, and the daemon carries on.
+  daemon_.Signal(SIGSTOP);
+  RunCommand({"/usr/bin/cangen", bus_, "-g", "0", "-I", "121", "-L", "7", "-n", "3000"}, &out, WallS(60));
+  daemon_.Signal(SIGCONT);
+  Sleep(0.5);
+  s = Status().value();
+  EXPECT_GT(s["can"]["rx_dropped"].get<uint64_t>(), 0u);
+  EXPECT_TRUE(daemon_.running());
+}
+
 TEST(CommandLineTest, BadConfigAndWorldFilesGiveOneLineAndStatus2) {
   const std::string dir = testing::MakeTempDir();
   {
