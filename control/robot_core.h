@@ -18,6 +18,17 @@
 
 namespace irslam::control {
 
+// The control socket's settings (config section [api]; used by irslamd only).
+struct ApiSettings {
+  std::string socket_group;    // chgrp the socket to this group ("": the daemon's)
+  std::string read_group;      // may call status/map/subscribe ("": anyone who can connect)
+  std::string control_group;   // may call start/stop too ("": anyone who can connect)
+  int max_clients = 16;
+  int max_line_bytes = 64 * 1024;
+  double idle_timeout_s = 300;
+  int max_pending_bytes = 1 << 20;
+};
+
 // Every parameter of the robot software (config file sections in brackets).
 struct CoreOptions {
   slam::SlamOptions slam;                 // [robot], [sensors].mounts, [slam]
@@ -29,6 +40,7 @@ struct CoreOptions {
   ModelOptions model;                     // [model]
   double period_s = 0.02;                 // [control].period_s
   double heartbeat_period_s = 0.1;        // [controller].heartbeat_period_s
+  ApiSettings api;                        // [api]
 };
 
 CoreOptions DefaultCoreOptions();

@@ -195,6 +195,28 @@ void ReadMission(const json& j, control::CoreOptions* o, std::string* e) {
 }
 
 
+void ReadString(const json& j, const char* key, std::string* out, Section* s) {
+  if (!j.is_object() || !j.contains(key)) return;
+  if (!j.at(key).is_string()) return s->Fail(key, "must be a string");
+  *out = j.at(key).get<std::string>();
+}
+
+void ReadApi(const json& j, control::CoreOptions* o, std::string* e) {
+  Section s(j, "api", e);
+  auto& a = o->api;
+  for (const auto& [key, out] : {std::pair<const char*, std::string*>{"socket_group", &a.socket_group},
+                                 {"read_group", &a.read_group},
+                                 {"control_group", &a.control_group}}) {
+    ReadString(j, key, out, &s);
+    s.Num(key, nullptr, 0, 0);
+  }
+  s.Int("max_clients", &a.max_clients, 1, 1024);
+  s.Int("max_line_bytes", &a.max_line_bytes, 256, 16 * 1024 * 1024);
+  s.Num("idle_timeout_s", &a.idle_timeout_s, 0.1, 1e6);
+  s.Int("max_pending_bytes", &a.max_pending_bytes, 4096, 256 * 1024 * 1024);
+  s.Finish();
+}
+
 void ReadExploration(const json& j, control::CoreOptions* o, std::string* e) {
   Section s(j, "exploration", e);
   auto& x = o->explore;
@@ -313,6 +335,7 @@ bool ParseConfig(std::string_view text, control::CoreOptions* options, std::stri
   ReadSlam(sub("slam"), &o, error);
   ReadExploration(sub("exploration"), &o, error);
   ReadModel(sub("model"), &o, error);
+  ReadApi(sub("api"), &o, error);
   top.Finish();
   if (!error->empty()) return false;
   *options = o;
@@ -348,6 +371,10 @@ std::string DumpConfig(const control::CoreOptions& o) {
   const auto& ex = o.explore;
   const auto& mo = o.model;
   json j = {
+      {"api", {{"socket_group", o.api.socket_group}, {"read_group", o.api.read_group},
+               {"control_group", o.api.control_group}, {"max_clients", o.api.max_clients},
+               {"max_line_bytes", o.api.max_line_bytes}, {"idle_timeout_s", o.api.idle_timeout_s},
+               {"max_pending_bytes", o.api.max_pending_bytes}}},
       {"exploration", {{"clearance_m", ex.clearance_m}, {"goal_tolerance_m", ex.goal_tolerance_m},
                        {"heading_tolerance_rad", ex.heading_tolerance_rad},
                        {"cruise_speed_mps", ex.cruise_speed_mps}, {"lookahead_m", ex.lookahead_m},

@@ -2,6 +2,8 @@
 
 #include <systemd/sd-daemon.h>
 
+#include <unistd.h>
+
 #include <cstdio>
 
 #include "daemon/config.h"
@@ -40,8 +42,22 @@ bool Daemon::Open(std::string* error) {
                         proto::kIrBId};
   bus_ = drivers::OpenCanBus(io_, bus_options, error);
   if (!bus_) return false;
+  const auto& a = core_options_.api;
+  access_.daemon_uid = ::getuid();
+  std::optional<gid_t> socket_gid;
+  for (const auto& [name, out] : {std::pair<const std::string*, std::optional<gid_t>*>{&a.socket_group, &socket_gid},
+                                  {&a.read_group, &access_.read_gid},
+                                  {&a.control_group, &access_.control_gid}}) {
+    if (name->empty()) continue;
+    *out = GroupId(*name, error);
+    if (!*out) return false;
+  }
   api_ = std::make_unique<ApiServer>(io_, options_.socket_path, options_.limits, this);
   if (!api_->Listen(error)) return false;
+  if (socket_gid && ::chown(options_.socket_path.c_str(), static_cast<uid_t>(-1), *socket_gid) != 0) {
+    *error = "api: cannot give " + options_.socket_path + " to group " + a.socket_group;
+    return false;
+  }
   bus_->Start([this](const can_frame& f, double) { core_->OnFrame(f, RobotNow()); });
   return true;
 }
@@ -175,10 +191,20 @@ nlohmann::json Daemon::StatusJson() {
 
 nlohmann::json Daemon::StatusNotification() { return StatusJson(); }
 
-bool Daemon::MaySubscribe(const PeerCred& /*peer*/) { return true; }
+bool Daemon::MaySubscribe(const PeerCred& peer) {
+  return Allowed(access_, peer.uid, PeerGroups(peer.uid, peer.gid), Access::kRead);
+}
 
-nlohmann::json Daemon::Handle(const rpc::Request& req, const PeerCred& /*peer*/) {
+nlohmann::json Daemon::Handle(const rpc::Request& req, const PeerCred& peer) {
   const double now = RobotNow();
+  const bool control = req.method == "start" || req.method == "stop";
+  if (!Allowed(access_, peer.uid, PeerGroups(peer.uid, peer.gid), control ? Access::kControl : Access::kRead)) {
+    std::fprintf(stderr, "<4>api: denied method=%s uid=%u pid=%d\n", req.method.c_str(),
+                 static_cast<unsigned>(peer.uid), static_cast<int>(peer.pid));
+    return rpc::MakeError(req.id, rpc::kAccessDenied,
+                          "access denied: " + req.method + " needs the " +
+                              (control ? "control" : "read") + " group");
+  }
   if (req.method == "status") return rpc::MakeResult(req.id, StatusJson());
   if (req.method == "map") return rpc::MakeResult(req.id, core_->Map());
   if (req.method == "start") {

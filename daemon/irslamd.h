@@ -12,6 +12,7 @@
 #include <string>
 
 #include "control/robot_core.h"
+#include "daemon/access.h"
 #include "daemon/api_server.h"
 #include "daemon/period_scheduler.h"
 #include "drivers/can_bus.h"
@@ -69,6 +70,7 @@ class Daemon : public ApiServer::Dispatcher {
   double last_watchdog_ = -1e9;
   control::MissionState last_state_ = control::MissionState::kIdle;
   bool running_ = false;
+  AccessPolicy access_;
 };
 
 }  // namespace irslam

@@ -19,8 +19,8 @@ int main(int argc, char** argv) {
                  "Robot time runs K times faster than wall time (tests, demos)")
       ->check(CLI::Range(0.01, 1000.0))
       ->capture_default_str();
-  app.add_option("--max-clients", options.limits.max_clients, "API client limit")
-      ->capture_default_str();
+  int max_clients = 0;
+  app.add_option("--max-clients", max_clients, "API client limit (overrides api.max_clients)");
   app.add_flag("--print-config", print_config, "Print the effective configuration and exit");
   try {
     app.parse(argc, argv);
@@ -33,6 +33,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "irslamd: %s\n", error.c_str());
     return 2;
   }
+  options.limits.max_clients = static_cast<size_t>(max_clients > 0 ? max_clients : core.api.max_clients);
+  options.limits.max_line_bytes = static_cast<size_t>(core.api.max_line_bytes);
+  options.limits.idle_timeout_s = core.api.idle_timeout_s;
+  options.limits.max_pending_bytes = static_cast<size_t>(core.api.max_pending_bytes);
   if (print_config) {
     std::printf("%s\n", irslam::DumpConfig(core).c_str());
     return 0;

@@ -2,6 +2,7 @@
 // over the loopback bus (vcan0 when IRSLAM_TEST_CAN=vcan0), time-scaled.
 #include <signal.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <sys/un.h>
 #include <unistd.h>
 
@@ -561,6 +562,42 @@ TEST_F(E2eTest, ErrorFramesAndKernelDropsAreCounted) {
   s = Status().value();
   EXPECT_GT(s["can"]["rx_dropped"].get<uint64_t>(), 0u);
   EXPECT_TRUE(daemon_.running());
+}
+
+TEST_F(E2eTest, ControlNeedsTheControlGroupReadingTheReadGroup) {
+  if (::getuid() != 0 || ::access("/usr/bin/setpriv", X_OK) != 0) {
+    GTEST_SKIP() << "needs root and setpriv to act as another user";
+  }
+  // The socket is given to group nogroup; nogroup may read, only root's group control.
+  const std::string conf = dir_ + "/irslamd.conf";
+  std::ofstream(conf) << R"({"api": {"socket_group": "nogroup", "read_group": "nogroup",
+                                     "control_group": "root"}})";
+  ::chmod(dir_.c_str(), 0755);
+  ASSERT_TRUE(sim_.Start({kSim, "serve", "--can", bus_, "--world", kSrc + "/tests/worlds/fig14.json",
+                          "--time-scale", std::to_string(kScale)}, dir_ + "/sim.log"));
+  ASSERT_TRUE(daemon_.Start({kDaemon, "--can", bus_, "--socket", socket_, "--time-scale",
+                             std::to_string(kScale), "--config", conf}, dir_ + "/daemon.log"));
+  std::optional<nlohmann::json> s;
+  for (int i = 0; i < 100 && !(s = Status()); ++i) Sleep(0.05);
+  ASSERT_TRUE(s);
+  struct stat st{};
+  ASSERT_EQ(::stat(socket_.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0660u);
+  EXPECT_EQ(st.st_gid, 65534u);
+  const std::vector<std::string> as_nobody = {"/usr/bin/setpriv", "--reuid=nobody", "--regid=nogroup",
+                                              "--clear-groups", kCtl, "--socket", socket_};
+  std::string out;
+  auto cmd = as_nobody;
+  cmd.push_back("status");
+  EXPECT_EQ(RunCommand(cmd, &out), 0) << out;
+  cmd = as_nobody;
+  cmd.push_back("start");
+  EXPECT_EQ(RunCommand(cmd, &out), 1);
+  EXPECT_EQ(out, "irslamctl: access denied: start needs the control group\n");
+  EXPECT_NE(testing::ReadFile(dir_ + "/daemon.log").find("api: denied method=start uid=65534"),
+            std::string::npos);
+  EXPECT_EQ(Status().value()["state"], "idle");
+  EXPECT_EQ(Ctl({"start"}), 0);  // root may
 }
 
 TEST(CommandLineTest, BadConfigAndWorldFilesGiveOneLineAndStatus2) {

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include "daemon/access.h"
 #include "daemon/config.h"
 #include "tests/testing/process.h"
 
@@ -71,6 +72,46 @@ TEST(ConfigTest, MissingFileIsOneLine) {
   std::string error;
   EXPECT_FALSE(LoadConfigFile("/nonexistent/irslamd.conf", &o, &error));
   EXPECT_EQ(error, "config: cannot read /nonexistent/irslamd.conf");
+}
+
+}  // namespace
+}  // namespace irslam
+
+namespace irslam {
+namespace {
+
+TEST(AccessTest, RootAndTheDaemonsUserMayDoEverything) {
+  AccessPolicy p{1000, 50, 60};
+  EXPECT_TRUE(Allowed(p, 0, {}, Access::kControl));
+  EXPECT_TRUE(Allowed(p, 1000, {}, Access::kControl));
+}
+
+TEST(AccessTest, ReadAndControlGroups) {
+  AccessPolicy p{1000, 50, 60};
+  EXPECT_TRUE(Allowed(p, 2000, {7, 50}, Access::kRead));
+  EXPECT_FALSE(Allowed(p, 2000, {7, 50}, Access::kControl));
+  EXPECT_TRUE(Allowed(p, 2001, {60}, Access::kControl));
+  EXPECT_TRUE(Allowed(p, 2001, {60}, Access::kRead));  // control implies read
+  EXPECT_FALSE(Allowed(p, 2002, {7}, Access::kRead));
+}
+
+TEST(AccessTest, UnsetGroupsLeaveItToTheSocketsPermissions) {
+  AccessPolicy p{1000, std::nullopt, std::nullopt};
+  EXPECT_TRUE(Allowed(p, 2002, {7}, Access::kRead));
+  EXPECT_TRUE(Allowed(p, 2002, {7}, Access::kControl));
+  p.control_gid = 60;
+  EXPECT_TRUE(Allowed(p, 2002, {7}, Access::kRead));
+  EXPECT_FALSE(Allowed(p, 2002, {7}, Access::kControl));
+}
+
+TEST(AccessTest, PeerGroupsIncludeThePrimaryAndSupplementaryGroups) {
+  const auto g = PeerGroups(0, 0);
+  ASSERT_FALSE(g.empty());
+  EXPECT_EQ(g.front(), 0u);
+  std::string error;
+  EXPECT_EQ(GroupId("root", &error), std::optional<gid_t>(0));
+  EXPECT_FALSE(GroupId("no-such-group-irslam", &error));
+  EXPECT_EQ(error, "api: no such group 'no-such-group-irslam'");
 }
 
 }  // namespace
