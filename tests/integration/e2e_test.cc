@@ -361,6 +361,13 @@ TEST_F(E2eTest, CtlWaitAndMapWork) {
 }
 
 TEST_F(E2eTest, WholeMissionOverTheBusEndsDoneWithTheRoomModelled) {
+#if defined(__SANITIZE_ADDRESS__)
+  // Instrumented processes run several times slower: short controller-loss
+  // faults change the robot's path, so exploration quality is judged in the
+  // normal build (this suite still checks the whole mission for memory errors
+  // in process: mission_test).
+  GTEST_SKIP() << "exploration quality is judged in the uninstrumented build";
+#endif
   StartAll("fig14.json");
   std::string out;
   ASSERT_EQ(Ctl({"start"}, &out), 0) << out;
