@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "proto/codec.h"
+
 namespace irslam::control {
 
 CoreOptions DefaultCoreOptions() {
@@ -20,7 +22,10 @@ RobotCore::RobotCore(CoreOptions options)
       motor_(options_.motor),
       calibration_(options_.ir),
       slam_(options_.slam),
-      mission_(options_.mission, options_.wall, options_.explore, options_.model, options_.slam) {}
+      mission_(options_.mission, options_.wall, options_.explore, options_.model, options_.slam),
+      estop_(options_.gpio.debounce_s),
+      bump_left_(options_.gpio.debounce_s),
+      bump_right_(options_.gpio.debounce_s) {}
 
 void RobotCore::OnFrame(const can_frame& frame, double now_s) {
   const drivers::MotorClient::Event ev = motor_.Handle(frame, now_s);
@@ -41,18 +46,55 @@ void RobotCore::OnFrame(const can_frame& frame, double now_s) {
   }
 }
 
+void RobotCore::OnSafetyInput(SafetyInput input, bool active, double now_s) {
+  switch (input) {
+    case SafetyInput::kEstop:
+      estop_.Input(active, now_s);
+      if (estop_.Poll(now_s) && !estop_latched_) {
+        estop_latched_ = true;
+        mission_.SetFault(now_s, "emergency stop pressed");
+        last_cmd_ = {};
+      }
+      break;
+    case SafetyInput::kBumperLeft: bump_left_.Input(active, now_s); break;
+    case SafetyInput::kBumperRight: bump_right_.Input(active, now_s); break;
+  }
+}
+
+bool RobotCore::MotorEnable() const {
+  if (estop_latched_ || estop_.active()) return false;
+  switch (mission_.state()) {
+    case MissionState::kWallFollow:
+    case MissionState::kModel:
+    case MissionState::kGoToP1:
+    case MissionState::kContourFollow: return true;
+    default: return false;
+  }
+}
+
+bool RobotCore::StatusLed(double now_s) const {
+  return LedOn(estop_latched_ ? MissionState::kFault : mission_.state(), now_s);
+}
+
 std::vector<can_frame> RobotCore::Tick(double now_s) {
   std::vector<can_frame> out;
   const bool alive = motor_.ControllerAlive(now_s);
-  if (alive) ever_alive_ = true;
   const bool active = mission_.state() != MissionState::kIdle &&
                       mission_.state() != MissionState::kDone;
-  if (!alive && active && mission_.state() != MissionState::kFault) {
+  const bool estop_was_pressed = estop_.active();
+  if (estop_latched_ && estop_was_pressed && !estop_.Poll(now_s)) {  // debounced release
+    mission_.SetFault(now_s, "emergency stop released: start to resume");
+  }
+  if (estop_latched_) {
+    // Only start clears an emergency stop.
+  } else if (!alive && active && mission_.state() != MissionState::kFault) {
     mission_.SetFault(now_s, std::string("controller lost: ") + motor_.LossReason(now_s));
   } else if (alive && mission_.state() == MissionState::kFault) {
     mission_.ClearFault(now_s);
   }
-  last_cmd_ = mission_.Step(now_s, slam_, scan_, bumpers_);
+  const uint8_t gpio_bumpers = static_cast<uint8_t>((bump_left_.Poll(now_s) ? proto::kBumperLeft : 0) |
+                                                    (bump_right_.Poll(now_s) ? proto::kBumperRight : 0));
+  last_cmd_ = mission_.Step(now_s, slam_, scan_, bumpers_ | gpio_bumpers);
   out.push_back(motor_.MakeCommand(last_cmd_));
   if (now_s - last_heartbeat_ >= options_.heartbeat_period_s - 1e-9) {
     last_heartbeat_ = now_s;
@@ -62,9 +104,19 @@ std::vector<can_frame> RobotCore::Tick(double now_s) {
 }
 
 bool RobotCore::Start(double now_s, std::string* why) {
+  if (estop_.Poll(now_s)) {
+    *why = "emergency stop is pressed";
+    return false;
+  }
   if (!motor_.ControllerAlive(now_s)) {
     *why = std::string("controller not reachable: ") + motor_.LossReason(now_s);
     return false;
+  }
+  if (estop_latched_) {
+    // Released and started again: carry on from where the stop came (SLAM kept).
+    estop_latched_ = false;
+    mission_.ClearFault(now_s);
+    if (mission_.state() != MissionState::kIdle && mission_.state() != MissionState::kDone) return true;
   }
   return mission_.Start(now_s, why);
 }
@@ -117,6 +169,9 @@ nlohmann::json RobotCore::Status(double now_s) const {
       {"ir_ranges", ranges},
       {"ir_adc", last_adc_},
       {"command", {last_cmd_.left_mps, last_cmd_.right_mps}},
+      {"safety", {{"estop", estop_.active()}, {"estop_latched", estop_latched_},
+                  {"bumper_left", bump_left_.active()}, {"bumper_right", bump_right_.active()},
+                  {"motor_enable", MotorEnable()}}},
       {"controller",
        {{"alive", motor_.ControllerAlive(now_s)},
         {"state", motor_.last_status() ? static_cast<int>(motor_.last_status()->state) : -1},

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "control/mission.h"
+#include "control/safety.h"
 #include "drivers/ir_calibration.h"
 #include "drivers/motor_client.h"
 #include "slam/slam.h"
@@ -41,6 +42,7 @@ struct CoreOptions {
   double period_s = 0.02;                 // [control].period_s
   double heartbeat_period_s = 0.1;        // [controller].heartbeat_period_s
   ApiSettings api;                        // [api]
+  GpioSettings gpio;                      // [gpio]
 };
 
 CoreOptions DefaultCoreOptions();
@@ -58,6 +60,16 @@ class RobotCore {
   void Stop(double now_s);
   // Frames that stop the wheels at once (used on stop and shutdown).
   can_frame StopFrame();
+
+  // The GPIO safety inputs (already corrected for their active level), as edges
+  // arrive. An emergency stop acts at once: fault, wheels zero, motor enable
+  // dropped; it stays latched until released and start is called again.
+  enum class SafetyInput { kEstop, kBumperLeft, kBumperRight };
+  void OnSafetyInput(SafetyInput input, bool active, double now_s);
+  // The outputs: motor-driver enable (only while driving is allowed) and the LED.
+  bool MotorEnable() const;
+  bool StatusLed(double now_s) const;
+  bool estop_latched() const { return estop_latched_; }
 
   nlohmann::json Status(double now_s) const;
   nlohmann::json Map() const;
@@ -77,8 +89,9 @@ class RobotCore {
   Mission mission_;
   RangeScan scan_;
   std::array<uint16_t, kNumIrSensors> last_adc_{};
-  uint8_t bumpers_ = 0;
-  bool ever_alive_ = false;
+  uint8_t bumpers_ = 0;       // from CTRL_STATUS
+  Debouncer estop_, bump_left_, bump_right_;
+  bool estop_latched_ = false;
   double last_heartbeat_ = -1e9;
   WheelCommand last_cmd_;
 };

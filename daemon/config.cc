@@ -217,6 +217,41 @@ void ReadApi(const json& j, control::CoreOptions* o, std::string* e) {
   s.Finish();
 }
 
+void ReadGpioLine(const char* key, drivers::GpioLineSpec* out, Section* parent, std::string* e) {
+  const json* sub = parent->Sub(key);
+  if (sub == nullptr) return;
+  Section s(*sub, parent->Name(key), e);
+  ReadString(*sub, "chip", &out->chip, &s);
+  s.Num("chip", nullptr, 0, 0);
+  if (sub->is_object() && sub->contains("line")) {
+    const json& l = sub->at("line");
+    if (l.is_number_unsigned()) {
+      out->line = std::to_string(l.get<uint64_t>());
+    } else if (l.is_string()) {
+      out->line = l.get<std::string>();
+    } else {
+      s.Fail("line", "must be a line name or an offset");
+    }
+  }
+  s.Num("line", nullptr, 0, 0);
+  ReadBool(*sub, "active_low", &out->active_low, &s);
+  s.Num("active_low", nullptr, 0, 0);
+  if (!out->chip.empty() && out->line.empty()) s.Fail("line", "must be given when chip is");
+  s.Finish();
+}
+
+void ReadGpio(const json& j, control::CoreOptions* o, std::string* e) {
+  Section s(j, "gpio", e);
+  auto& g = o->gpio;
+  ReadGpioLine("estop", &g.estop, &s, e);
+  ReadGpioLine("bumper_left", &g.bumper_left, &s, e);
+  ReadGpioLine("bumper_right", &g.bumper_right, &s, e);
+  ReadGpioLine("motor_enable", &g.motor_enable, &s, e);
+  ReadGpioLine("status_led", &g.status_led, &s, e);
+  s.Num("debounce_s", &g.debounce_s, 0, 1);
+  s.Finish();
+}
+
 void ReadExploration(const json& j, control::CoreOptions* o, std::string* e) {
   Section s(j, "exploration", e);
   auto& x = o->explore;
@@ -336,6 +371,7 @@ bool ParseConfig(std::string_view text, control::CoreOptions* options, std::stri
   ReadExploration(sub("exploration"), &o, error);
   ReadModel(sub("model"), &o, error);
   ReadApi(sub("api"), &o, error);
+  ReadGpio(sub("gpio"), &o, error);
   top.Finish();
   if (!error->empty()) return false;
   *options = o;
@@ -370,7 +406,14 @@ std::string DumpConfig(const control::CoreOptions& o) {
   const auto& a = o.slam.association;
   const auto& ex = o.explore;
   const auto& mo = o.model;
+  const auto line = [](const drivers::GpioLineSpec& l) {
+    return json{{"chip", l.chip}, {"line", l.line}, {"active_low", l.active_low}};
+  };
+  const auto& gp = o.gpio;
   json j = {
+      {"gpio", {{"estop", line(gp.estop)}, {"bumper_left", line(gp.bumper_left)},
+                {"bumper_right", line(gp.bumper_right)}, {"motor_enable", line(gp.motor_enable)},
+                {"status_led", line(gp.status_led)}, {"debounce_s", gp.debounce_s}}},
       {"api", {{"socket_group", o.api.socket_group}, {"read_group", o.api.read_group},
                {"control_group", o.api.control_group}, {"max_clients", o.api.max_clients},
                {"max_line_bytes", o.api.max_line_bytes}, {"idle_timeout_s", o.api.idle_timeout_s},

@@ -12,6 +12,14 @@
 namespace irslam {
 
 namespace {
+std::string DumpGpio(const drivers::GpioSettings& g) {
+  std::string out;
+  for (const auto* l : {&g.estop, &g.bumper_left, &g.bumper_right, &g.motor_enable, &g.status_led}) {
+    out += l->chip + "/" + l->line + "/" + (l->active_low ? "1" : "0") + ";";
+  }
+  return out;
+}
+
 int64_t Ns(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
 }
@@ -42,6 +50,9 @@ bool Daemon::Open(std::string* error) {
                         proto::kIrBId};
   bus_ = drivers::OpenCanBus(io_, bus_options, error);
   if (!bus_) return false;
+  // A configured safety line that cannot be had is an error, never ignored.
+  gpio_ = drivers::Gpio::Open(io_, core_options_.gpio, error);
+  if (!gpio_) return false;
   const auto& a = core_options_.api;
   access_.daemon_uid = ::getuid();
   std::optional<gid_t> socket_gid;
@@ -59,7 +70,31 @@ bool Daemon::Open(std::string* error) {
     return false;
   }
   bus_->Start([this](const can_frame& f, double) { core_->OnFrame(f, RobotNow()); });
+  gpio_->Start([this](drivers::Gpio::Input in, bool active) { OnGpioInput(in, active); });
   return true;
+}
+
+void Daemon::OnGpioInput(drivers::Gpio::Input input, bool active) {
+  using In = drivers::Gpio::Input;
+  using Safety = control::RobotCore::SafetyInput;
+  const double now = RobotNow();
+  const bool was_latched = core_->estop_latched();
+  core_->OnSafetyInput(input == In::kEstop        ? Safety::kEstop
+                       : input == In::kBumperLeft ? Safety::kBumperLeft
+                                                  : Safety::kBumperRight,
+                       active, now);
+  if (core_->estop_latched() && !was_latched) {
+    // At once, not at the next period: wheels zero and the driver disabled.
+    if (bus_) bus_->Send(core_->StopFrame());
+    ApplyOutputs(now);
+    std::fprintf(stderr, "<2>irslamd: emergency stop pressed: wheels stopped, motor driver disabled\n");
+  }
+}
+
+void Daemon::ApplyOutputs(double now) {
+  if (!gpio_) return;
+  gpio_->SetMotorEnable(running_ && core_->MotorEnable());
+  gpio_->SetLed(core_->StatusLed(now));
 }
 
 void Daemon::Notify(const std::string& text) { sd_notify(0, text.c_str()); }
@@ -95,6 +130,7 @@ void Daemon::OnTick() {
   scheduler_.OnWake(Ns(woke));
   const double now = RobotNow();
   for (const can_frame& f : core_->Tick(now)) bus_->Send(f);
+  ApplyOutputs(now);
   if (core_->state() != last_state_) {
     last_state_ = core_->state();
     std::fprintf(stderr, "<6>irslamd: state=%s reason=\"%s\"\n", control::ToString(last_state_),
@@ -127,6 +163,7 @@ void Daemon::Shutdown() {
   running_ = false;
   core_->Stop(RobotNow());
   if (bus_) bus_->Send(core_->StopFrame());
+  if (gpio_) gpio_->Close();  // motor driver disabled, LED off
   timer_.cancel();
   signals_.cancel();
   if (api_) api_->Close();
@@ -149,9 +186,18 @@ void Daemon::Reload() {
   const auto s = core_->state();
   if (s == control::MissionState::kIdle || s == control::MissionState::kDone) {
     pending_options_.reset();
+    if (DumpGpio(fresh.gpio) != DumpGpio(core_options_.gpio)) {
+      std::fprintf(stderr, "<4>irslamd: [gpio] lines are opened at start: the change applies after a restart\n");
+      fresh.gpio.estop = core_options_.gpio.estop;
+      fresh.gpio.bumper_left = core_options_.gpio.bumper_left;
+      fresh.gpio.bumper_right = core_options_.gpio.bumper_right;
+      fresh.gpio.motor_enable = core_options_.gpio.motor_enable;
+      fresh.gpio.status_led = core_options_.gpio.status_led;
+    }
     core_options_ = fresh;
     auto next = std::make_unique<control::RobotCore>(fresh);
     core_ = std::move(next);
+    if (gpio_) gpio_->Replay();  // the new core learns the inputs' present levels
     scheduler_ = PeriodScheduler(static_cast<int64_t>(fresh.period_s / options_.time_scale * 1e9),
                                  Ns(Clock::now()));
     std::fprintf(stderr, "<5>irslamd: config reloaded from %s\n", options_.config_path.c_str());
@@ -186,6 +232,12 @@ nlohmann::json Daemon::StatusJson() {
               {"dropped_slow", a.dropped_slow}, {"dropped_long_line", a.dropped_long_line},
               {"rejected_full", a.rejected_full}};
   s["config_pending"] = pending_options_.has_value();
+  nlohmann::json lines = nlohmann::json::object();
+  for (const auto& l : gpio_->lines()) {
+    lines[l.role] = {{"chip", l.chip}, {"label", l.label}, {"offset", l.offset}, {"name", l.name},
+                     {"output", l.output}, {"active", l.active}};
+  }
+  s["gpio"] = {{"lines", lines}, {"events", gpio_->events()}};
   return s;
 }
 
@@ -221,6 +273,7 @@ nlohmann::json Daemon::Handle(const rpc::Request& req, const PeerCred& peer) {
   if (req.method == "stop") {
     core_->Stop(now);
     bus_->Send(core_->StopFrame());  // at once, not at the next period
+    ApplyOutputs(now);
     std::fprintf(stderr, "<6>irslamd: stopped by request\n");
     return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
   }

@@ -16,6 +16,7 @@
 #include "daemon/api_server.h"
 #include "daemon/period_scheduler.h"
 #include "drivers/can_bus.h"
+#include "drivers/gpio.h"
 
 namespace irslam {
 
@@ -53,6 +54,9 @@ class Daemon : public ApiServer::Dispatcher {
   void Shutdown();
   nlohmann::json StatusJson();
   void Notify(const std::string& text);
+  void OnGpioInput(drivers::Gpio::Input input, bool active);
+  // Drives the GPIO outputs (motor enable, LED) from the core's state.
+  void ApplyOutputs(double now);
 
   boost::asio::io_context& io_;
   DaemonOptions options_;
@@ -61,6 +65,7 @@ class Daemon : public ApiServer::Dispatcher {
   std::unique_ptr<control::RobotCore> core_;
   std::unique_ptr<drivers::CanBus> bus_;
   std::unique_ptr<ApiServer> api_;
+  std::unique_ptr<drivers::Gpio> gpio_;
   boost::asio::steady_timer timer_;
   boost::asio::signal_set signals_;
   Clock::time_point start_;

@@ -29,6 +29,9 @@ fi
 irslam_build
 cd "$IRSLAM_ROOT"
 # The VM shares this directory read-write and the host's root read-only.
-RUN_IN_VM_CACHE=$cache RUN_IN_VM_TIMEOUT=${IRSLAM_VM_TIMEOUT:-2400} \
+# gpio-sim: 8 lines of chip gpio-sim-robot, the first five named for the GPIO test.
+RUN_IN_VM_GPIO_LABEL=gpio-sim-robot RUN_IN_VM_GPIO_LINES=8 \
+  RUN_IN_VM_GPIO_NAMES=estop,bumper-left,bumper-right,motor-enable,status-led \
+  RUN_IN_VM_CACHE=$cache RUN_IN_VM_TIMEOUT=${IRSLAM_VM_TIMEOUT:-2400} \
   bash vcan-scripts/run-in-vm.sh -- env IRSLAM_TEST_CAN=vcan0 IRSLAM_TEST_TIME_SCALE="$scale" \
   "$IRSLAM_BUILD/tests/integration_test" --gtest_filter="$filter"

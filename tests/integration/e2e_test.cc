@@ -8,11 +8,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -655,6 +657,138 @@ TEST(CommandLineTest, BadConfigAndWorldFilesGiveOneLineAndStatus2) {
   std::filesystem::remove_all(dir);
 }
 
+// The gpio-sim chip of the VM harness (vcan-scripts/run-in-vm.sh, label
+// gpio-sim-robot, lines named by vm-test.sh): its sysfs directory, where a test
+// pulls an input line (sim_gpioN/pull) and reads an output line (sim_gpioN/value).
+std::string GpioSimDir() {
+  const std::string cfg = "/sys/kernel/config/gpio-sim/sim0";
+  std::string dev = testing::ReadFile(cfg + "/dev_name"), chip = testing::ReadFile(cfg + "/bank0/chip_name");
+  if (dev.empty() || chip.empty()) return "";
+  while (!dev.empty() && dev.back() == '\n') dev.pop_back();
+  while (!chip.empty() && chip.back() == '\n') chip.pop_back();
+  return "/sys/devices/platform/" + dev + "/" + chip;
+}
+
+void Pull(const std::string& sim, int offset, bool up) {
+  std::ofstream(sim + "/sim_gpio" + std::to_string(offset) + "/pull") << (up ? "pull-up" : "pull-down");
+}
+
+int OutputLevel(const std::string& sim, int offset) {
+  const std::string v = testing::ReadFile(sim + "/sim_gpio" + std::to_string(offset) + "/value");
+  return v.empty() ? -1 : v[0] - '0';
+}
+
+TEST_F(E2eTest, GpioEstopBumperMotorEnableAndLedOnGpioSim) {
+  const std::string sim = GpioSimDir();
+  if (sim.empty()) GTEST_SKIP() << "needs a gpio-sim chip: runs in the VM suite (vcan-scripts/vm-test.sh)";
+  // Lines 0..4 of chip gpio-sim-robot; the e-stop is active-low (a normally-closed
+  // button pulled up: released = high), the others active-high. Some by offset,
+  // some by name, as a robot's config may do either.
+  Pull(sim, 0, true);
+  Pull(sim, 1, false);
+  Pull(sim, 2, false);
+  StartOptions o;
+  o.config = {{"gpio",
+               {{"estop", {{"chip", "gpio-sim-robot"}, {"line", 0}, {"active_low", true}}},
+                {"bumper_left", {{"chip", "gpio-sim-robot"}, {"line", "bumper-left"}}},
+                {"bumper_right", {{"chip", "gpio-sim-robot"}, {"line", "bumper-right"}}},
+                {"motor_enable", {{"chip", "gpio-sim-robot"}, {"line", 3}}},
+                {"status_led", {{"chip", "gpio-sim-robot"}, {"line", "status-led"}}}}}};
+  StartAll(o);
+  auto s = Status().value();
+  const auto& lines = s["gpio"]["lines"];
+  ASSERT_EQ(lines.size(), 5u) << s["gpio"].dump();
+  EXPECT_EQ(lines["estop"]["label"], "gpio-sim-robot");
+  EXPECT_EQ(lines["estop"]["offset"], 0);
+  EXPECT_EQ(lines["bumper_right"]["offset"], 2);
+  EXPECT_EQ(lines["status_led"]["offset"], 4);
+  EXPECT_EQ(s["state"], "idle");
+  EXPECT_FALSE(s["safety"]["estop"].get<bool>());
+  EXPECT_EQ(OutputLevel(sim, 3), 0) << "motor driver enabled while idle";
+  EXPECT_EQ(OutputLevel(sim, 4), 1) << "idle: LED steady on";
+
+  // Driving: the driver is enabled; the LED blinks at 1 Hz of robot time.
+  ASSERT_EQ(Ctl({"start"}), 0);
+  WaitRobotTime(Status().value()["robot_time"].get<double>() + 2);
+  EXPECT_EQ(OutputLevel(sim, 3), 1) << "motor driver not enabled while driving";
+  std::set<int> led;
+  for (int i = 0; i < 40; ++i) {
+    led.insert(OutputLevel(sim, 4));
+    Sleep(WallS(0.05));
+  }
+  EXPECT_EQ(led, (std::set<int>{0, 1})) << "the LED does not blink while driving";
+
+  // A bumper line held: seen in status and acted on (the robot backs off).
+  Pull(sim, 1, true);
+  bool seen = false, backed_off = false;
+  for (int i = 0; i < 100 && !(seen && backed_off); ++i) {
+    const auto st = Status().value();
+    seen |= st["safety"]["bumper_left"] == true;
+    backed_off |= st["behaviour"] == "backoff";
+    Sleep(0.02);
+  }
+  Pull(sim, 1, false);
+  EXPECT_TRUE(seen);
+  EXPECT_TRUE(backed_off);
+
+  // E-stop pressed (the line goes low): fault, wheels zero, driver disabled at once.
+  testing::BusTap tap(bus_);
+  ASSERT_TRUE(tap.ok()) << tap.error();
+  Sleep(0.2);
+  const auto pressed_at = Clock::now();
+  Pull(sim, 0, false);
+  while (OutputLevel(sim, 3) != 0 && Clock::now() - pressed_at < std::chrono::seconds(5)) {
+  }
+  const auto dropped_at = Clock::now();  // first seen low (an upper bound)
+  EXPECT_EQ(OutputLevel(sim, 3), 0);
+  const double latency = std::chrono::duration<double>(dropped_at - pressed_at).count();
+  std::printf("e-stop to motor enable dropped: %.1f ms wall\n", latency * 1e3);
+  // Within one control period of robot time (software emulation adds its own delay).
+  EXPECT_LT(latency, 0.02 / kScale + 0.1);
+  Sleep(0.3);
+  s = Status().value();
+  EXPECT_EQ(s["state"], "fault");
+  EXPECT_EQ(s["reason"], "emergency stop pressed");
+  EXPECT_EQ(s["command"][0], 0.0);
+  EXPECT_EQ(s["command"][1], 0.0);
+  // Every wheel command from shortly after the press on is zero and disabled.
+  int after = 0;
+  for (const auto& f : tap.Frames()) {
+    const auto d = proto::Decode(f.frame);
+    const auto* cmd = d.ok() ? std::get_if<proto::WheelCommand>(&d.message) : nullptr;
+    if (cmd == nullptr || f.at < pressed_at + std::chrono::milliseconds(100)) continue;
+    ++after;
+    EXPECT_FALSE(cmd->enable);
+    EXPECT_EQ(cmd->left_mps, 0.0);
+  }
+  EXPECT_GT(after, 3);
+  std::string out;
+  EXPECT_EQ(Ctl({"start"}, &out), 1);
+  EXPECT_NE(out.find("emergency stop is pressed"), std::string::npos) << out;
+
+  // Released: still fault until start is called again; then it carries on.
+  Pull(sim, 0, true);
+  Sleep(0.3);
+  s = Status().value();
+  EXPECT_EQ(s["state"], "fault");
+  EXPECT_EQ(s["reason"], "emergency stop released: start to resume");
+  EXPECT_EQ(OutputLevel(sim, 3), 0);
+  ASSERT_EQ(Ctl({"start"}, &out), 0) << out;
+  WaitRobotTime(Status().value()["robot_time"].get<double>() + 1);
+  s = Status().value();
+  EXPECT_EQ(s["state"], "wall_follow");
+  EXPECT_EQ(OutputLevel(sim, 3), 1);
+  ASSERT_EQ(Ctl({"stop"}), 0);
+  Sleep(0.2);
+  EXPECT_EQ(OutputLevel(sim, 3), 0);
+  EXPECT_EQ(OutputLevel(sim, 4), 1);
+  EXPECT_GE(Status().value()["gpio"]["events"].get<int>(), 4);
+  // On exit the lines are let go with the driver disabled.
+  daemon_.Signal(SIGTERM);
+  EXPECT_EQ(daemon_.Wait(5), 0);
+  EXPECT_EQ(OutputLevel(sim, 3), 0);
+}
+
 TEST(CommandLineTest, UnusableCanInterfaceIsExplained) {
   std::string out;
   const std::string dir = testing::MakeTempDir();
@@ -662,6 +796,20 @@ TEST(CommandLineTest, UnusableCanInterfaceIsExplained) {
   EXPECT_TRUE(out.find("no CAN support") != std::string::npos ||
               out.find("no such interface 'nocan7'") != std::string::npos)
       << out;
+  std::filesystem::remove_all(dir);
+}
+
+TEST(CommandLineTest, AConfiguredGpioLineThatIsNotThereIsAnError) {
+  // A safety line in the config must not be silently ignored when it is missing.
+  std::string out;
+  const std::string dir = testing::MakeTempDir();
+  std::ofstream(dir + "/gpio.conf") << R"({"gpio": {"estop": {"chip": "no-such-chip", "line": 0}}})";
+  EXPECT_EQ(RunCommand({kDaemon, "--can", "unix:" + dir + "/bus", "--socket", dir + "/s.sock", "--config",
+                        dir + "/gpio.conf"},
+                       &out),
+            1);
+  EXPECT_EQ(out.rfind("irslamd: gpio: estop (chip 'no-such-chip' line '0'): no such chip", 0), 0u) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
   std::filesystem::remove_all(dir);
 }
 

@@ -1,0 +1,36 @@
+// The GPIO lines irslamd may use (config section [gpio]): plain data, shared by
+// the pure core (control/safety.h) and the libgpiod driver (drivers/gpio.h).
+#ifndef IRSLAM_DRIVERS_GPIO_SETTINGS_H_
+#define IRSLAM_DRIVERS_GPIO_SETTINGS_H_
+
+#include <string>
+
+namespace irslam::drivers {
+
+// One GPIO line: the chip (label, name such as "gpiochip0", path or number, as
+// libgpiod's lookup takes it) and the line (its name, or its offset as a number).
+// An empty chip means the robot has no such line.
+struct GpioLineSpec {
+  std::string chip;
+  std::string line;
+  bool active_low = false;  // the line's active (pressed / on) level is low
+  bool used() const { return !chip.empty(); }
+};
+
+// Config section [gpio]; every line is optional.
+struct GpioSettings {
+  GpioLineSpec estop;         // input: emergency-stop button
+  GpioLineSpec bumper_left;   // input: left bumper switch
+  GpioLineSpec bumper_right;  // input: right bumper switch
+  GpioLineSpec motor_enable;  // output: motor-driver enable
+  GpioLineSpec status_led;    // output: status LED
+  double debounce_s = 0.02;   // a release counts once the input stayed released this long
+  bool any_used() const {
+    return estop.used() || bumper_left.used() || bumper_right.used() || motor_enable.used() ||
+           status_led.used();
+  }
+};
+
+}  // namespace irslam::drivers
+
+#endif  // IRSLAM_DRIVERS_GPIO_SETTINGS_H_
