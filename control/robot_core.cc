@@ -17,9 +17,17 @@ CoreOptions DefaultCoreOptions() {
   return o;
 }
 
+namespace {
+drivers::MotorClientOptions WithCountLimit(drivers::MotorClientOptions m, const slam::RobotGeometry& g) {
+  m.max_counts_per_s = m.plausible_speed_factor * g.max_wheel_speed_mps / (2 * M_PI * g.wheel_radius_m) *
+                       g.counts_per_rev;
+  return m;
+}
+}  // namespace
+
 RobotCore::RobotCore(CoreOptions options)
     : options_(std::move(options)),
-      motor_(options_.motor),
+      motor_(WithCountLimit(options_.motor, options_.slam.geometry)),
       calibration_(options_.ir),
       slam_(options_.slam),
       mission_(options_.mission, options_.wall, options_.explore, options_.model, options_.slam),
@@ -34,11 +42,23 @@ void RobotCore::OnFrame(const can_frame& frame, double now_s) {
     if (ev.ticks->t >= slam_.time()) slam_.AddWheelTicks(*ev.ticks);
   }
   if (ev.ir_adc) {
-    last_adc_ = *ev.ir_adc;
     scan_.t = ev.ir_t;
+    const auto& ir = options_.ir;
     for (int i = 0; i < kNumIrSensors; ++i) {
-      scan_.range_m[i] = calibration_.CountsToRange((*ev.ir_adc)[i]);
+      const uint16_t adc = (*ev.ir_adc)[i];
+      same_adc_[i] = adc == last_adc_[i] ? same_adc_[i] + 1 : 0;
+      const double v = calibration_.CountsToVolts(adc);
+      if (v < ir.plausible_min_v || v > ir.plausible_max_v) {
+        ++ir_out_of_range_;  // a sensor fault, not a distance
+        scan_.range_m[i].reset();
+      } else if (ir.stuck_samples > 0 && same_adc_[i] + 1 >= ir.stuck_samples) {
+        ++ir_stuck_;
+        scan_.range_m[i].reset();
+      } else {
+        scan_.range_m[i] = calibration_.CountsToRange(adc);
+      }
     }
+    last_adc_ = *ev.ir_adc;
     slam_.AddRangeScan(scan_);
   }
   if (ev.status) {
@@ -189,7 +209,14 @@ nlohmann::json RobotCore::Status(double now_s) const {
         {"seq_gap_ir", c.seq_gap_ir},
         {"seq_gap_status", c.seq_gap_status},
         {"ir_unpaired", c.ir_unpaired},
-        {"controller_resets", c.controller_resets}}},
+        {"controller_resets", c.controller_resets},
+        {"clock_jumps", c.clock_jumps},
+        {"duplicate", c.duplicate},
+        {"stale", c.stale},
+        {"implausible_time", c.implausible_time},
+        {"implausible_counts", c.implausible_counts},
+        {"ir_out_of_range", ir_out_of_range_},
+        {"ir_stuck", ir_stuck_}}},
   };
   return s;
 }

@@ -89,6 +89,8 @@ class RobotCore {
   Mission mission_;
   RangeScan scan_;
   std::array<uint16_t, kNumIrSensors> last_adc_{};
+  std::array<int, kNumIrSensors> same_adc_{};  // samples in a row with the same raw value
+  uint64_t ir_out_of_range_ = 0, ir_stuck_ = 0;
   uint8_t bumpers_ = 0;       // from CTRL_STATUS
   Debouncer estop_, bump_left_, bump_right_;
   bool estop_latched_ = false;

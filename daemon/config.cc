@@ -122,6 +122,9 @@ void ReadSensors(const json& j, control::CoreOptions* o, std::string* e) {
   s.Int("adc_bits", &ir.adc_bits, 8, 16);
   s.Num("min_range_m", &ir.min_range_m, 0.0, 10.0);
   s.Num("max_range_m", &ir.max_range_m, 0.0, 10.0);
+  s.Num("plausible_min_v", &ir.plausible_min_v, 0.0, 10.0);
+  s.Num("plausible_max_v", &ir.plausible_max_v, 0.0, 10.0);
+  s.Int("stuck_samples", &ir.stuck_samples, 0, 100000);
   if (const json* t = s.Array("table")) {
     std::vector<std::pair<double, double>> table;
     for (size_t i = 0; i < t->size(); ++i) {
@@ -145,6 +148,7 @@ void ReadController(const json& j, control::CoreOptions* o, std::string* e) {
   Section s(j, "controller", e);
   s.Num("timeout_s", &o->motor.timeout_s, 0.005, 10);
   s.Num("heartbeat_period_s", &o->heartbeat_period_s, 0.01, 10);
+  s.Num("plausible_speed_factor", &o->motor.plausible_speed_factor, 0, 100);
   s.Finish();
 }
 
@@ -432,8 +436,11 @@ std::string DumpConfig(const control::CoreOptions& o) {
                  {"max_wheel_speed_mps", g.max_wheel_speed_mps}}},
       {"sensors", {{"mounts", mounts}, {"adc_vref_v", o.ir.adc_vref_v},
                    {"adc_bits", o.ir.adc_bits}, {"table", table},
-                   {"min_range_m", o.ir.min_range_m}, {"max_range_m", o.ir.max_range_m}}},
+                   {"min_range_m", o.ir.min_range_m}, {"max_range_m", o.ir.max_range_m},
+                   {"plausible_min_v", o.ir.plausible_min_v}, {"plausible_max_v", o.ir.plausible_max_v},
+                   {"stuck_samples", o.ir.stuck_samples}}},
       {"controller", {{"timeout_s", o.motor.timeout_s},
+                      {"plausible_speed_factor", o.motor.plausible_speed_factor},
                       {"heartbeat_period_s", o.heartbeat_period_s}}},
       {"control", {{"period_s", o.period_s}}},
       {"wall_follow", {{"follow_distance_m", w.follow_distance_m},

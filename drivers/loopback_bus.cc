@@ -5,7 +5,9 @@
 // directory. Frames sent in one turn of the event loop travel together in one
 // datagram (a whole number of can_frames, at most kMaxBatch): the kernel limits a
 // datagram socket's queue to net.unix.max_dgram_qlen datagrams (10 by default),
-// which one frame per datagram would overflow in any burst. The peer list is re-read whenever the directory changed (its mtime,
+// which one frame per datagram would overflow in any burst. A node whose queue is
+// still full gets its frames a little later, in order (bounded, kMaxBacklogFrames),
+// as a vcan socket's receive buffer would hold them. The peer list is re-read whenever the directory changed (its mtime,
 // compared conservatively because the kernel stamps it with a coarse clock), so a
 // node that joined is reached by the very next frame. A peer that died leaves a
 // socket file nobody listens on: sendto() says ECONNREFUSED and we unlink it.
@@ -40,7 +42,7 @@ bool MakeAddr(const std::string& path, sockaddr_un* addr, socklen_t* len) {
 }  // namespace
 
 LoopbackBus::LoopbackBus(boost::asio::io_context& io, std::string dir, std::vector<uint32_t> ids)
-    : DescriptorBus(io), dir_(std::move(dir)), ids_(std::move(ids)) {}
+    : DescriptorBus(io), dir_(std::move(dir)), ids_(std::move(ids)), retry_timer_(io) {}
 
 LoopbackBus::~LoopbackBus() { Close(); }
 
@@ -165,47 +167,89 @@ void LoopbackBus::Flush() {
   pending_.clear();
 }
 
+int LoopbackBus::SendTo(const std::string& peer, const std::vector<can_frame>& batch) {
+  sockaddr_un addr;
+  socklen_t len;
+  if (!MakeAddr(peer, &addr, &len)) return -1;
+  const ssize_t n = ::sendto(descriptor_.native_handle(), batch.data(), batch.size() * sizeof(can_frame),
+                             MSG_DONTWAIT | MSG_NOSIGNAL, reinterpret_cast<sockaddr*>(&addr), len);
+  if (n >= 0) return 1;
+  if (errno == ECONNREFUSED || errno == ENOENT) {
+    // A node that died without cleaning up (ECONNREFUSED) or just left (ENOENT).
+    if (errno == ECONNREFUSED) ::unlink(peer.c_str());
+    return -1;
+  }
+  return 0;  // EAGAIN: that node's receive queue is full
+}
+
 void LoopbackBus::SendBatch(const can_frame* frames, size_t count) {
   if (!open_) {
     stats_.tx_dropped += count;
     return;
   }
   RefreshPeers();
-  bool all_ok = true;
+  const std::vector<can_frame> batch(frames, frames + count);
   for (size_t i = 0; i < peers_.size();) {
-    sockaddr_un addr;
-    socklen_t len;
-    if (!MakeAddr(peers_[i], &addr, &len)) {
-      ++i;
-      continue;
-    }
-    const ssize_t n = ::sendto(descriptor_.native_handle(), frames, count * sizeof(can_frame),
-                               MSG_DONTWAIT | MSG_NOSIGNAL,
-                               reinterpret_cast<sockaddr*>(&addr), len);
-    if (n < 0 && (errno == ECONNREFUSED || errno == ENOENT)) {
-      // A node that died without cleaning up (ECONNREFUSED) or just left (ENOENT).
-      if (errno == ECONNREFUSED) ::unlink(peers_[i].c_str());
+    auto& held = backlog_[peers_[i]];
+    // Frames stay in order: behind what is already held for that node.
+    const int r = held.empty() ? SendTo(peers_[i], batch) : 0;
+    if (r < 0) {
+      backlog_.erase(peers_[i]);
       peers_.erase(peers_.begin() + static_cast<std::ptrdiff_t>(i));
       continue;
     }
-    if (n < 0) {
-      // EAGAIN: that node's receive queue is full; like a CAN node that is not
-      // keeping up, it loses the frame.
-      all_ok = false;
+    if (r == 0) {
+      // A node that is not keeping up: its frames wait (bounded, like a
+      // socket's receive buffer), and are sent as soon as it has room.
+      held.push_back(batch);
+      size_t frames_held = 0;
+      for (const auto& b : held) frames_held += b.size();
+      while (frames_held > kMaxBacklogFrames) {
+        frames_held -= held.front().size();
+        stats_.tx_dropped += held.front().size();
+        held.pop_front();
+      }
+      ArmRetry();
     }
     ++i;
   }
-  if (all_ok) {
-    stats_.tx_frames += count;
-  } else {
-    stats_.tx_dropped += count;
+  stats_.tx_frames += count;
+}
+
+void LoopbackBus::RetryBacklog() {
+  bool again = false;
+  for (auto it = backlog_.begin(); it != backlog_.end();) {
+    auto& held = it->second;
+    int r = 1;
+    while (!held.empty() && (r = SendTo(it->first, held.front())) == 1) held.pop_front();
+    if (r < 0) {
+      stats_.tx_dropped += held.size();
+      it = backlog_.erase(it);
+      continue;
+    }
+    again |= !held.empty();
+    ++it;
   }
+  if (again && open_) ArmRetry();
+}
+
+void LoopbackBus::ArmRetry() {
+  if (retry_armed_) return;
+  retry_armed_ = true;
+  retry_timer_.expires_after(std::chrono::milliseconds(1));
+  retry_timer_.async_wait([this, alive = alive_](const boost::system::error_code& ec) {
+    if (ec || !*alive) return;
+    retry_armed_ = false;
+    RetryBacklog();
+  });
 }
 
 void LoopbackBus::Close() {
   if (!open_) return;
   Flush();  // frames sent just before closing (the stop command) still go out
+  RetryBacklog();
   open_ = false;
+  retry_timer_.cancel();
   *alive_ = false;
   boost::system::error_code ec;
   descriptor_.cancel(ec);

@@ -1,6 +1,7 @@
 #include "drivers/motor_client.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace irslam::drivers {
 
@@ -17,24 +18,62 @@ int64_t Unwrapper16::Update(uint16_t raw) {
   return value_;
 }
 
-double MotorClient::ControllerTime(uint16_t stamp_ms) {
-  const int64_t before = clock_.value();
-  const bool had = clock_.initialized();
-  int64_t now = clock_.Update(stamp_ms);
-  // A controller clock that jumps back by more than a second has been reset:
-  // keep our time base continuous and restart the wheel count bases.
-  if (had && now < before - 1000) {
-    ++counters_.controller_resets;
-    clock_.Rebase(before + 10);
-    now = clock_.Update(stamp_ms);
-    left_.Rebase(left_.value());
-    right_.Rebase(right_.value());
-    seq_encoder_.reset();
-    seq_ir_.reset();
-    seq_status_.reset();
-    pending_ir_a_.reset();
+int64_t Unwrapper16::Peek(uint16_t raw) const {
+  if (!initialized_ || rebase_) return rebase_ ? base_ : raw;
+  return value_ + static_cast<int16_t>(static_cast<uint16_t>(raw - last_raw_));
+}
+
+namespace {
+// A stamp may lag the controller's clock by this much (an IR sample taken before
+// the last encoder frame was sent) and lead it by this much beyond the host's own
+// elapsed time (frames queued behind a stalled reader).
+constexpr double kMaxLagS = 0.5;
+constexpr double kMaxLeadS = 0.5;
+// Impossible count jumps are judged with this much slack (quantisation, jitter).
+constexpr double kCountSlack = 20;
+}  // namespace
+
+std::optional<double> MotorClient::ControllerTime(uint16_t stamp_ms, double now_s) {
+  if (!clock_.initialized()) {
+    host_at_clock_ = now_s;
+    return static_cast<double>(clock_.Update(stamp_ms)) * 1e-3;
   }
-  return static_cast<double>(now) * 1e-3;
+  const int64_t before = clock_.value();
+  const double dt = static_cast<double>(clock_.Peek(stamp_ms) - before) * 1e-3;
+  const double host_dt = std::max(0.0, now_s - host_at_clock_);
+  if (dt >= -kMaxLagS && dt <= host_dt + kMaxLeadS) {
+    suspects_ = 0;
+    suspect_stamp_.reset();
+    if (dt > 0) host_at_clock_ = now_s;
+    return static_cast<double>(clock_.Update(stamp_ms)) * 1e-3;
+  }
+  // Far from the clock: a corrupted stamp (dropped), or the controller restarted
+  // / its clock jumped. Only when kConfirm stamps in a row agree with each other
+  // on the new clock is it taken: time and wheel counts then carry on
+  // continuously from where they were.
+  ++counters_.implausible_time;
+  const bool agrees = suspect_stamp_ &&
+                      std::abs(static_cast<int16_t>(static_cast<uint16_t>(stamp_ms - *suspect_stamp_))) <= 500;
+  suspects_ = agrees ? suspects_ + 1 : 1;
+  suspect_stamp_ = stamp_ms;
+  if (suspects_ < kConfirm) return std::nullopt;
+  if (dt < 0) {
+    ++counters_.controller_resets;
+  } else {
+    ++counters_.clock_jumps;
+  }
+  suspects_ = 0;
+  suspect_stamp_.reset();
+  clock_.Rebase(before + std::max<int64_t>(1, std::llround(host_dt * 1000)));
+  host_at_clock_ = now_s;
+  left_.Rebase(left_.value());
+  right_.Rebase(right_.value());
+  seq_encoder_.reset();
+  seq_ir_.reset();
+  seq_status_.reset();
+  pending_ir_a_.reset();
+  last_ir_pair_seq_.reset();
+  return static_cast<double>(clock_.Update(stamp_ms)) * 1e-3;
 }
 
 void MotorClient::CheckSeq(std::optional<uint8_t>* last, uint8_t seq, uint64_t* gaps) {
@@ -53,16 +92,54 @@ MotorClient::Event MotorClient::Handle(const can_frame& frame, double now_s) {
     }
     return ev;
   }
+  // Checked in this order, each rejection counted by reason; nothing rejected is
+  // passed on (so it never reaches SLAM): implausible time stamp, duplicate or
+  // stale (older than what was taken: reordered, late), impossible count jump.
+  const auto ordered = [this](double t, std::optional<double>* last) {
+    if (*last && t <= **last) {
+      ++(t == **last ? counters_.duplicate : counters_.stale);
+      return false;
+    }
+    return true;
+  };
   if (const auto* e = std::get_if<proto::EncoderCounts>(&r.message)) {
     ++counters_.encoder_frames;
-    const double t = ControllerTime(e->timestamp_ms);
+    last_encoder_rx_ = now_s;  // the controller is there, whatever its data
+    const auto t = ControllerTime(e->timestamp_ms, now_s);
+    if (!t || !ordered(*t, &last_enc_t_)) return ev;
+    if (options_.max_counts_per_s > 0 && last_enc_t_ && left_.initialized()) {
+      const double limit = options_.max_counts_per_s * (*t - *last_enc_t_) + kCountSlack;
+      const auto jump = [&](const Unwrapper16& u, uint16_t raw) {
+        return std::abs(static_cast<double>(u.Peek(raw) - u.value())) > limit;
+      };
+      if (jump(left_, e->left) || jump(right_, e->right)) {
+        ++counters_.implausible_counts;
+        // One bad frame is dropped; a jump that stays (kConfirm in a row) is a
+        // glitch of the counter itself: carry on from the new count.
+        if (++count_suspects_ < kConfirm) return ev;
+        left_.Rebase(left_.value());
+        right_.Rebase(right_.value());
+      }
+    }
+    count_suspects_ = 0;
     CheckSeq(&seq_encoder_, e->seq, &counters_.seq_gap_encoder);
-    ev.ticks = WheelTicks{t, left_.Update(e->left), right_.Update(e->right)};
-    last_encoder_rx_ = now_s;
+    last_enc_t_ = t;
+    ev.ticks = WheelTicks{*t, left_.Update(e->left), right_.Update(e->right)};
   } else if (const auto* a = std::get_if<proto::IrA>(&r.message)) {
+    if (pending_ir_a_ && pending_ir_a_->seq == a->seq && pending_ir_a_->timestamp_ms == a->timestamp_ms) {
+      ++counters_.duplicate;
+      return ev;
+    }
     if (pending_ir_a_) ++counters_.ir_unpaired;
+    pending_ir_a_.reset();
+    const auto t = ControllerTime(a->timestamp_ms, now_s);
+    if (!t || !ordered(*t, &last_ir_t_)) return ev;
     pending_ir_a_ = *a;
   } else if (const auto* b = std::get_if<proto::IrB>(&r.message)) {
+    if (!pending_ir_a_ && last_ir_pair_seq_ == b->seq) {
+      ++counters_.duplicate;  // the B half of a sample already taken
+      return ev;
+    }
     if (!pending_ir_a_ || pending_ir_a_->seq != b->seq) {
       ++counters_.ir_unpaired;
       if (pending_ir_a_) ++counters_.ir_unpaired;
@@ -73,17 +150,20 @@ MotorClient::Event MotorClient::Handle(const can_frame& frame, double now_s) {
     std::array<uint16_t, kNumIrSensors> adc{};
     for (int i = 0; i < 3; ++i) adc[i] = pending_ir_a_->adc[i];
     for (int i = 0; i < 4; ++i) adc[3 + i] = b->adc[i];
-    ev.ir_t = ControllerTime(pending_ir_a_->timestamp_ms);
+    ev.ir_t = static_cast<double>(clock_.Peek(pending_ir_a_->timestamp_ms)) * 1e-3;
+    last_ir_t_ = ev.ir_t;
+    last_ir_pair_seq_ = b->seq;
     ev.ir_adc = adc;
     pending_ir_a_.reset();
     ++counters_.ir_samples;
   } else if (const auto* s = std::get_if<proto::ControllerStatus>(&r.message)) {
     ++counters_.status_frames;
-    ControllerTime(s->timestamp_ms);
+    last_status_rx_ = now_s;
+    const auto t = ControllerTime(s->timestamp_ms, now_s);
+    if (!t || !ordered(*t, &last_status_t_)) return ev;
     CheckSeq(&seq_status_, s->seq, &counters_.seq_gap_status);
     last_status_ = *s;
     ev.status = *s;
-    last_status_rx_ = now_s;
   } else {
     ++counters_.ignored;
   }

@@ -22,6 +22,8 @@ namespace irslam::drivers {
 class Unwrapper16 {
  public:
   int64_t Update(uint16_t raw);
+  // What Update(raw) would return, without taking the sample.
+  int64_t Peek(uint16_t raw) const;
   // The next sample becomes `base` + 0 (used after a controller reset).
   void Rebase(int64_t base) {
     rebase_ = true;
@@ -49,12 +51,23 @@ struct MotorClientCounters {
   uint64_t seq_gap_ir = 0;
   uint64_t seq_gap_status = 0;
   uint64_t ir_unpaired = 0;     // IR_A/IR_B halves that never found their partner
-  uint64_t controller_resets = 0;
+  uint64_t controller_resets = 0;  // the controller's clock went back (it restarted)
+  // Implausible data, never passed on (see MotorClient::Handle).
+  uint64_t duplicate = 0;           // a frame whose time was already seen
+  uint64_t stale = 0;               // a frame older than one already taken (reordered/late)
+  uint64_t implausible_time = 0;    // a time stamp far from where the controller's clock is
+  uint64_t implausible_counts = 0;  // a count jump impossible at the maximum wheel speed
+  uint64_t clock_jumps = 0;         // the controller's clock re-anchored forward
 };
 
 struct MotorClientOptions {
   // Encoder/status silence beyond this (robot seconds) means the controller is lost.
   double timeout_s = 0.1;
+  // The fastest a wheel's count can change (counts/s); 0 = not checked. RobotCore
+  // sets it from the robot geometry ([robot].max_wheel_speed_mps x
+  // [controller].plausible_speed_factor).
+  double max_counts_per_s = 0;
+  double plausible_speed_factor = 2.0;
 };
 
 class MotorClient {
@@ -83,7 +96,10 @@ class MotorClient {
   const std::optional<proto::ControllerStatus>& last_status() const { return last_status_; }
 
  private:
-  double ControllerTime(uint16_t stamp_ms);
+  // The controller time of a stamp in seconds, or nullopt when the stamp is
+  // implausible (counted). Re-anchors after kConfirm consistent implausible stamps.
+  std::optional<double> ControllerTime(uint16_t stamp_ms, double now_s);
+  static constexpr int kConfirm = 3;
   void CheckSeq(std::optional<uint8_t>* last, uint8_t seq, uint64_t* gaps);
 
   MotorClientOptions options_;
@@ -94,6 +110,12 @@ class MotorClient {
   std::optional<uint8_t> seq_encoder_, seq_ir_, seq_status_;
   std::optional<proto::IrA> pending_ir_a_;
   std::optional<proto::ControllerStatus> last_status_;
+  double host_at_clock_ = 0;                 // host time when the clock last advanced
+  std::optional<uint16_t> suspect_stamp_;    // the last implausible stamp ...
+  int suspects_ = 0;                         // ... and how many agreeing ones in a row
+  int count_suspects_ = 0;                   // encoder frames with impossible counts in a row
+  std::optional<double> last_enc_t_, last_ir_t_, last_status_t_;
+  std::optional<uint8_t> last_ir_pair_seq_;
   double last_encoder_rx_ = -1e9;
   double last_status_rx_ = -1e9;
   uint8_t cmd_seq_ = 0;

@@ -2,6 +2,9 @@
 #define IRSLAM_DRIVERS_INTERNAL_LOOPBACK_BUS_H_
 
 #include <boost/asio/posix/stream_descriptor.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <deque>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -52,10 +55,17 @@ class LoopbackBus final : public DescriptorBus {
 
  private:
   static constexpr size_t kMaxBatch = 64;
+  // Frames held for a node whose receive queue is full, like the receive buffer
+  // of a vcan socket (~300 frames of 212992 bytes); beyond it the oldest are lost.
+  static constexpr size_t kMaxBacklogFrames = 512;
 
   void Drain() override;
   void Flush();
   void SendBatch(const can_frame* frames, size_t count);
+  // sendto() one datagram to one peer: 1 sent, 0 queue full, -1 the peer is gone.
+  int SendTo(const std::string& peer, const std::vector<can_frame>& batch);
+  void RetryBacklog();
+  void ArmRetry();
   void RefreshPeers();
   bool Wanted(uint32_t id) const;
 
@@ -68,6 +78,9 @@ class LoopbackBus final : public DescriptorBus {
   bool peers_valid_ = false;
   std::vector<can_frame> pending_;
   bool flush_posted_ = false;
+  std::map<std::string, std::deque<std::vector<can_frame>>> backlog_;  // per peer
+  boost::asio::steady_timer retry_timer_;
+  bool retry_armed_ = false;
   std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);
 };
 

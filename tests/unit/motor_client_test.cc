@@ -65,18 +65,90 @@ TEST(MotorClientTest, DetectsControllerLossAndRecovery) {
 
 TEST(MotorClientTest, ControllerResetKeepsTimeAndCountsContinuous) {
   MotorClient c{MotorClientOptions{}};
-  c.Handle(Encode(proto::EncoderCounts{30000, 5000, 6000, 10}), 0);
-  auto before = c.Handle(Encode(proto::EncoderCounts{30010, 5010, 6010, 11}), 0);
-  // The controller restarts: its clock and counters start again from zero.
-  auto after = c.Handle(Encode(proto::EncoderCounts{5, 0, 0, 0}), 0);
+  c.Handle(Encode(proto::EncoderCounts{30000, 5000, 6000, 10}), 10.00);
+  auto before = c.Handle(Encode(proto::EncoderCounts{30010, 5010, 6010, 11}), 10.01);
+  // The controller restarts: its clock and counters start again from zero. Two
+  // frames are held back as possibly corrupt; the third that agrees re-anchors.
+  EXPECT_FALSE(c.Handle(Encode(proto::EncoderCounts{5, 0, 0, 0}), 10.50).ticks);
+  EXPECT_FALSE(c.Handle(Encode(proto::EncoderCounts{15, 3, 4, 1}), 10.51).ticks);
+  auto after = c.Handle(Encode(proto::EncoderCounts{25, 6, 8, 2}), 10.52);
   ASSERT_TRUE(before.ticks && after.ticks);
   EXPECT_EQ(c.counters().controller_resets, 1u);
-  EXPECT_GT(after.ticks->t, before.ticks->t);
+  EXPECT_EQ(c.counters().implausible_time, 3u);
+  // Time carries on with the host's elapsed time; the counts without a jump.
+  EXPECT_NEAR(after.ticks->t - before.ticks->t, 0.51, 1e-9);
   EXPECT_EQ(after.ticks->left, before.ticks->left);
   EXPECT_EQ(after.ticks->right, before.ticks->right);
-  auto next = c.Handle(Encode(proto::EncoderCounts{15, 7, 9, 1}), 0);
+  auto next = c.Handle(Encode(proto::EncoderCounts{35, 13, 17, 3}), 10.53);
+  ASSERT_TRUE(next.ticks);
   EXPECT_EQ(next.ticks->left - after.ticks->left, 7);
   EXPECT_EQ(next.ticks->right - after.ticks->right, 9);
+  EXPECT_EQ(c.counters().seq_gap_encoder, 0u);
+}
+
+TEST(MotorClientTest, ACorruptTimeStampIsDroppedAndCounted) {
+  MotorClient c{MotorClientOptions{}};
+  c.Handle(Encode(proto::EncoderCounts{1000, 100, 100, 0}), 1.00);
+  // Bit 14 of the stamp flipped: 16 s ahead of the clock.
+  EXPECT_FALSE(c.Handle(Encode(proto::EncoderCounts{1010 | 0x4000, 102, 102, 1}), 1.01).ticks);
+  auto ok = c.Handle(Encode(proto::EncoderCounts{1020, 104, 104, 2}), 1.02);
+  ASSERT_TRUE(ok.ticks);
+  EXPECT_DOUBLE_EQ(ok.ticks->t, 1.020);
+  EXPECT_EQ(c.counters().implausible_time, 1u);
+  EXPECT_EQ(c.counters().controller_resets + c.counters().clock_jumps, 0u);
+}
+
+TEST(MotorClientTest, DuplicatedAndReorderedFramesAreDropped) {
+  MotorClient c{MotorClientOptions{}};
+  EXPECT_TRUE(c.Handle(Encode(proto::EncoderCounts{1000, 0, 0, 0}), 1.0).ticks);
+  EXPECT_TRUE(c.Handle(Encode(proto::EncoderCounts{1020, 4, 4, 2}), 1.02).ticks);
+  EXPECT_FALSE(c.Handle(Encode(proto::EncoderCounts{1020, 4, 4, 2}), 1.02).ticks);  // duplicate
+  EXPECT_FALSE(c.Handle(Encode(proto::EncoderCounts{1010, 2, 2, 1}), 1.02).ticks);  // late
+  EXPECT_EQ(c.counters().duplicate, 1u);
+  EXPECT_EQ(c.counters().stale, 1u);
+  // IR: a duplicated half is not a second sample.
+  c.Handle(Encode(proto::IrA{7, 1030, {1, 2, 3}}), 1.03);
+  c.Handle(Encode(proto::IrA{7, 1030, {1, 2, 3}}), 1.03);
+  EXPECT_TRUE(c.Handle(Encode(proto::IrB{7, {4, 5, 6, 7}}), 1.03).ir_adc);
+  EXPECT_FALSE(c.Handle(Encode(proto::IrB{7, {4, 5, 6, 7}}), 1.03).ir_adc);
+  EXPECT_EQ(c.counters().duplicate, 3u);
+  EXPECT_EQ(c.counters().ir_samples, 1u);
+  EXPECT_EQ(c.counters().ir_unpaired, 0u);
+}
+
+TEST(MotorClientTest, ImpossibleCountJumpsNeverReachTheCaller) {
+  MotorClientOptions o;
+  o.max_counts_per_s = 10000;  // 100 counts per 10 ms frame, + 20 slack
+  MotorClient c{o};
+  c.Handle(Encode(proto::EncoderCounts{1000, 100, 100, 0}), 1.0);
+  // A one-frame glitch: dropped, the next frame continues from the last good one.
+  EXPECT_FALSE(c.Handle(Encode(proto::EncoderCounts{1010, 100 + 4096, 150, 1}), 1.01).ticks);
+  auto ok = c.Handle(Encode(proto::EncoderCounts{1020, 180, 180, 2}), 1.02);
+  ASSERT_TRUE(ok.ticks);
+  EXPECT_EQ(ok.ticks->left, 180);
+  // A jump that stays: three frames in a row, then carried on from the new count
+  // without the jump (the motion of the held frames is lost, not the jump added).
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_FALSE(c.Handle(Encode(proto::EncoderCounts{static_cast<uint16_t>(1030 + 10 * i),
+                                                      static_cast<uint16_t>(5180 + 10 * i), 190, 3}),
+                          1.03 + 0.01 * i)
+                     .ticks);
+  }
+  auto third = c.Handle(Encode(proto::EncoderCounts{1050, 5200, 200, 5}), 1.05);
+  ASSERT_TRUE(third.ticks);
+  EXPECT_EQ(third.ticks->left, 180);
+  auto next = c.Handle(Encode(proto::EncoderCounts{1060, 5210, 210, 6}), 1.06);
+  EXPECT_EQ(next.ticks->left, 190);
+  EXPECT_EQ(c.counters().implausible_counts, 4u);
+}
+
+TEST(MotorClientTest, ALongSilenceWithoutResetIsNotAJump) {
+  MotorClient c{MotorClientOptions{}};
+  c.Handle(Encode(proto::EncoderCounts{1000, 0, 0, 0}), 1.0);
+  auto ev = c.Handle(Encode(proto::EncoderCounts{4000, 0, 0, 1}), 4.0);  // 3 s later on both clocks
+  ASSERT_TRUE(ev.ticks);
+  EXPECT_DOUBLE_EQ(ev.ticks->t, 4.0);
+  EXPECT_EQ(c.counters().implausible_time, 0u);
 }
 
 TEST(MotorClientTest, CountsBadFramesByReason) {
