@@ -25,7 +25,7 @@ struct IrCalibrationOptions {
   // Plausibility (RobotCore): outputs outside [plausible_min_v, plausible_max_v]
   // are a sensor fault (the Sharp output never exceeds ~3 V nor drops to 0 V);
   // the same raw count stuck_samples times in a row is a stuck sensor (0 = off).
-  double plausible_min_v = 0.25;
+  double plausible_min_v = 0.05;
   double plausible_max_v = 3.0;
   int stuck_samples = 50;
 

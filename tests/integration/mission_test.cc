@@ -95,3 +95,43 @@ TEST(RobustnessTest, ChairLegsNeitherTrapTheRobotNorBecomeFurniture) {
 
 }  // namespace
 }  // namespace irslam
+
+namespace irslam {
+namespace {
+
+// The whole mission with the controller's frames lost, duplicated, reordered,
+// delayed and corrupted, an encoder count that jumps and stays, a stuck IR sensor
+// and short bursts of loss (docs/reliability.md): bad data is counted by reason,
+// none of it reaches SLAM, and the mission still ends done with every piece found.
+TEST(FaultRunTest, MissionEndsDoneThroughLossCorruptionReorderingAndGlitches) {
+  std::string error;
+  const auto faults = sim::ParseFaultSpec(
+      "loss:p=0.03,duplicate:p=0.03,reorder:p=0.03,delay:p=0.03:max=0.03,corrupt:p=0.005,"
+      "encoder_glitch:at=60:counts=3000,stuck_ir:sensor=6:at=30:for=30,burst:every=20:len=0.05",
+      &error);
+  ASSERT_TRUE(faults) << error;
+  const sim::World world = testing::LoadTestWorld("fig14");
+  for (uint64_t seed : {1, 2}) {
+    sim::InProcessRun run =
+        sim::RunInProcess(world, control::DefaultCoreOptions(), seed, kLimitS, nullptr, &*faults);
+    EXPECT_EQ(run.core->state(), control::MissionState::kDone) << "seed " << seed;
+    EXPECT_EQ(run.sim->collisions(), 0u) << "seed " << seed;
+    const auto sc = metrics::ScoreObjects(run.core->Map(), run.core->slam(), world);
+    EXPECT_EQ(sc.found, sc.pieces) << "seed " << seed;
+    EXPECT_EQ(sc.kind_right, sc.pieces) << "seed " << seed;
+    EXPECT_LT(sc.max_edge_m, 0.25) << "seed " << seed;
+    const nlohmann::json status = run.core->Status(run.t);
+    const auto& f = status["frames"];
+    const auto& injected = run.faults->counters();
+    EXPECT_GT(injected.duplicated, 500u);
+    EXPECT_GT(f["duplicate"].get<uint64_t>(), 500u) << f;
+    EXPECT_GT(f["stale"].get<uint64_t>(), 500u) << f;
+    EXPECT_GE(f["implausible_counts"].get<uint64_t>(), 3u) << f;  // the lasting glitch, at least
+    EXPECT_GT(f["implausible_time"].get<uint64_t>(), 0u) << f;
+    EXPECT_GT(f["ir_stuck"].get<uint64_t>(), 300u) << f;
+    EXPECT_GT(f["seq_gap_encoder"].get<uint64_t>(), 500u) << f;
+  }
+}
+
+}  // namespace
+}  // namespace irslam

@@ -17,6 +17,7 @@
 #include "drivers/can_bus.h"
 #include "proto/codec.h"
 #include "proto/json_text.h"
+#include "tests/sim/faults.h"
 #include "tests/sim/sim_controller.h"
 #include "tests/sim/sim_run.h"
 
@@ -49,6 +50,7 @@ struct Common {
   std::string config_path;
   std::optional<uint64_t> seed;
   std::string truth_out;
+  std::string faults;  // --faults SPEC (tests/sim/faults.h, docs/reliability.md)
 };
 
 bool Load(const Common& c, World* world, control::CoreOptions* core, uint64_t* seed) {
@@ -68,12 +70,30 @@ bool Load(const Common& c, World* world, control::CoreOptions* core, uint64_t* s
   return true;
 }
 
+bool LoadFaults(const Common& c, FaultSpec* spec) {
+  std::string error;
+  auto f = ParseFaultSpec(c.faults, &error);
+  if (!f) {
+    std::fprintf(stderr, "irslam-sim: %s\n", error.c_str());
+    return false;
+  }
+  *spec = *f;
+  return true;
+}
+
+nlohmann::json FaultsJson(const FaultCounters& f) {
+  return {{"lost", f.lost},         {"corrupted", f.corrupted}, {"duplicated", f.duplicated},
+          {"reordered", f.reordered}, {"delayed", f.delayed},   {"silenced", f.silenced},
+          {"flooded", f.flooded},   {"stuck", f.stuck},         {"glitched", f.glitched}};
+}
+
 int Run(const Common& c, double max_time, const std::string& map_out, const std::string& svg_out,
         const std::string& lines_out) {
   World world;
   control::CoreOptions core_opts;
   uint64_t seed;
-  if (!Load(c, &world, &core_opts, &seed)) return kExitUsage;
+  FaultSpec faults;
+  if (!Load(c, &world, &core_opts, &seed) || !LoadFaults(c, &faults)) return kExitUsage;
   // Optionally record every extracted line observation (irslam-weights reads them).
   std::ofstream lines_file;
   if (!lines_out.empty()) {
@@ -96,7 +116,7 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
                  << "\n";
     }
   };
-  InProcessRun run = RunInProcess(world, core_opts, seed, max_time, record);
+  InProcessRun run = RunInProcess(world, core_opts, seed, max_time, record, faults.any() ? &faults : nullptr);
   if (!run.error.empty()) {
     std::fprintf(stderr, "irslam-sim: cannot start the mission: %s\n", run.error.c_str());
     return 1;
@@ -108,7 +128,9 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
     std::fprintf(stderr, "irslam-sim: cannot write %s\n", map_out.c_str());
     return 1;
   }
-  if (!WriteJson(c.truth_out, sim.Truth())) {
+  nlohmann::json truth = sim.Truth();
+  if (run.faults) truth["faults"] = FaultsJson(run.faults->counters());
+  if (!WriteJson(c.truth_out, truth)) {
     std::fprintf(stderr, "irslam-sim: cannot write %s\n", c.truth_out.c_str());
     return 1;
   }
@@ -128,6 +150,10 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
                "min clearance %.3f m\n",
                status["state"].get<std::string>().c_str(), t, core.slam().distance_m(),
                static_cast<unsigned long long>(sim.collisions()), sim.min_clearance());
+  if (run.faults) {
+    std::fprintf(stderr, "irslam-sim: injected %s; irslamd's frame counters: %s\n",
+                 FaultsJson(run.faults->counters()).dump().c_str(), status["frames"].dump().c_str());
+  }
   if (core.state() != control::MissionState::kDone) {
     std::fprintf(stderr, "irslam-sim: mission did not finish: state %s, %s\n",
                  status["state"].get<std::string>().c_str(),
@@ -141,8 +167,10 @@ int Serve(const Common& c, const std::string& iface, double time_scale) {
   World world;
   control::CoreOptions core_opts;
   uint64_t seed;
-  if (!Load(c, &world, &core_opts, &seed)) return kExitUsage;
+  FaultSpec faults;
+  if (!Load(c, &world, &core_opts, &seed) || !LoadFaults(c, &faults)) return kExitUsage;
   SimController sim(world, SimOptionsFrom(core_opts), seed);
+  FaultInjector injector(faults, seed);
 
   boost::asio::io_context io;
   std::string error;
@@ -159,14 +187,19 @@ int Serve(const Common& c, const std::string& iface, double time_scale) {
   const auto tick = std::chrono::microseconds(1000);
   boost::asio::steady_timer timer(io);
   timer.expires_at(start + tick);
-  std::vector<can_frame> frames;
+  std::vector<can_frame> frames, out;
+  double last_wall = 0;
   std::function<void(const boost::system::error_code&)> on_tick =
       [&](const boost::system::error_code& ec) {
         if (ec) return;
         const double wall = std::chrono::duration<double>(Clock::now() - start).count();
         frames.clear();
+        out.clear();
         sim.AdvanceTo(wall * time_scale, &frames);
-        for (const can_frame& f : frames) bus->Send(f);
+        injector.Process(sim.time(), frames, &out);
+        injector.Flood(sim.time(), wall - last_wall, &out);
+        last_wall = wall;
+        for (const can_frame& f : out) bus->Send(f);
         timer.expires_at(timer.expiry() + tick);
         if (timer.expiry() < Clock::now()) timer.expires_at(Clock::now() + tick);
         timer.async_wait(on_tick);
@@ -181,8 +214,11 @@ int Serve(const Common& c, const std::string& iface, double time_scale) {
   });
   std::fprintf(stderr, "irslam-sim: serving world '%s' on %s at time scale %g\n",
                world.name.c_str(), bus->name().c_str(), time_scale);
+  if (faults.any()) std::fprintf(stderr, "irslam-sim: injecting faults: %s\n", c.faults.c_str());
   io.run();
-  if (!WriteJson(c.truth_out, sim.Truth())) {
+  nlohmann::json truth = sim.Truth();
+  if (faults.any()) truth["faults"] = FaultsJson(injector.counters());
+  if (!WriteJson(c.truth_out, truth)) {
     std::fprintf(stderr, "irslam-sim: cannot write %s\n", c.truth_out.c_str());
     return 1;
   }
@@ -202,6 +238,10 @@ int main(int argc, char** argv) {
     sub->add_option("--world", common.world_path, "World file (JSON, contracts §1)")->required();
     sub->add_option("--seed", common.seed, "Random seed (default: the world's, else 1)");
     sub->add_option("--truth-out", common.truth_out, "Write the truth file here (contracts §5)");
+    sub->add_option("--faults", common.faults,
+                    "Inject faults between the controller and the bus: NAME[:KEY=VALUE...],... "
+                    "(loss, burst, corrupt, duplicate, reorder, delay, silence, flood, stuck_ir, "
+                    "encoder_glitch; docs/reliability.md)");
     sub->add_option("--config", common.config_path,
                     "irslamd config file (robot geometry, sensors; and the core in 'run')");
   };

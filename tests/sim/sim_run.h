@@ -8,6 +8,7 @@
 #include <string>
 
 #include "control/robot_core.h"
+#include "tests/sim/faults.h"
 #include "tests/sim/sim_controller.h"
 
 namespace irslam::sim {
@@ -17,6 +18,7 @@ SimOptions SimOptionsFrom(const control::CoreOptions& core);
 struct InProcessRun {
   std::unique_ptr<SimController> sim;
   std::unique_ptr<control::RobotCore> core;
+  std::unique_ptr<FaultInjector> faults;  // when faults were injected
   double t = 0;
   std::string error;  // set when the mission could not start
 };
@@ -25,7 +27,8 @@ struct InProcessRun {
 // on_tick (optional) is called after every control period.
 InProcessRun RunInProcess(const World& world, const control::CoreOptions& options, uint64_t seed,
                           double max_time_s,
-                          const std::function<void(const InProcessRun&)>& on_tick = nullptr);
+                          const std::function<void(const InProcessRun&)>& on_tick = nullptr,
+                          const FaultSpec* faults = nullptr);
 
 }  // namespace irslam::sim
 
