@@ -55,6 +55,7 @@ struct StartOptions {
   std::string world = "wall_follow_fig14.json";
   nlohmann::json config = nlohmann::json::object();
   std::vector<std::string> daemon_env;
+  std::vector<std::string> sim_args;  // e.g. {"--faults", "..."}
   bool wait_for_controller = true;
 };
 
@@ -93,9 +94,10 @@ class E2eTest : public ::testing::Test {
 
   void StartAll(const StartOptions& o = StartOptions()) {
     std::ofstream(ConfigPath()) << TestConfig(o.config).dump(2) << "\n";
-    ASSERT_TRUE(sim_.Start({kSim, "serve", "--can", bus_, "--world", kSrc + "/tests/worlds/" + o.world,
-                            "--time-scale", std::to_string(kScale), "--truth-out", dir_ + "/truth.json"},
-                           dir_ + "/sim.log"));
+    std::vector<std::string> sim = {kSim, "serve", "--can", bus_, "--world", kSrc + "/tests/worlds/" + o.world,
+                                    "--time-scale", std::to_string(kScale), "--truth-out", dir_ + "/truth.json"};
+    sim.insert(sim.end(), o.sim_args.begin(), o.sim_args.end());
+    ASSERT_TRUE(sim_.Start(sim, dir_ + "/sim.log"));
     ASSERT_TRUE(daemon_.Start({kDaemon, "--can", bus_, "--socket", socket_, "--time-scale",
                                std::to_string(kScale), "--config", ConfigPath()},
                               dir_ + "/daemon.log", o.daemon_env));
@@ -655,6 +657,113 @@ TEST(CommandLineTest, BadConfigAndWorldFilesGiveOneLineAndStatus2) {
     EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
   }
   std::filesystem::remove_all(dir);
+}
+
+// Faults injected by the simulator (irslam-sim --faults; docs/reliability.md),
+// through the real processes.
+
+TEST_F(E2eTest, ControllerSilenceAndResetFaultThenResumeKeepingTheMap) {
+  StartOptions o;
+  // Silent for 6 s from 12 s of robot time, and restarted meanwhile (its clock,
+  // counts and sequence numbers start again from zero).
+  o.sim_args = {"--faults", "silence:at=12:for=6:reset=1"};
+  StartAll(o);
+  ASSERT_EQ(Ctl({"start"}), 0);
+  const auto before = WaitRobotTime(11);
+  const int lines_before = before["lines"];
+  ASSERT_EQ(before["state"], "wall_follow");
+  bool faulted = false;
+  nlohmann::json s;
+  for (int i = 0; i < 400 && !faulted; ++i) {
+    s = Status().value();
+    faulted = s["state"] == "fault";
+    if (!faulted) Sleep(0.02);
+  }
+  ASSERT_TRUE(faulted) << s.dump();
+  EXPECT_EQ(s["reason"].get<std::string>().rfind("controller lost: ", 0), 0u) << s["reason"];
+  EXPECT_FALSE(s["controller"]["alive"].get<bool>());
+  Sleep(WallS(0.1));
+  s = Status().value();
+  EXPECT_EQ(s["state"], "fault");
+  EXPECT_EQ(s["command"][0], 0.0);
+  EXPECT_EQ(s["command"][1], 0.0);
+  // Frames come back from a restarted controller: the mission carries on from
+  // where it was, with its map.
+  s = WaitRobotTime(24);
+  EXPECT_EQ(s["state"], "wall_follow") << s.dump();
+  EXPECT_EQ(s["reason"].get<std::string>().rfind("resumed after: controller lost", 0), 0u) << s["reason"];
+  EXPECT_GE(s["lines"].get<int>(), lines_before);
+  EXPECT_GE(s["frames"]["controller_resets"].get<int>() + s["frames"]["clock_jumps"].get<int>(), 1) << s["frames"];
+  const double d = s["distance"];
+  s = WaitRobotTime(28);
+  EXPECT_GT(s["distance"].get<double>(), d + 0.3) << "not moving again";
+  EXPECT_EQ(StopSimAndReadTruth()["collisions"], 0);
+}
+
+TEST_F(E2eTest, CorruptAndImplausibleFramesAreCountedByReasonWhileTheRobotKeepsGoing) {
+  StartOptions o;
+  o.sim_args = {"--faults",
+                "corrupt:p=0.02,duplicate:p=0.05,reorder:p=0.05,delay:p=0.02:max=0.03,"
+                "encoder_glitch:at=6:counts=3000,stuck_ir:sensor=6:at=3"};
+  StartAll(o);
+  ASSERT_EQ(Ctl({"start"}), 0);
+  const auto s = WaitRobotTime(25);
+  const auto& f = s["frames"];
+  EXPECT_EQ(s["state"], "wall_follow") << s.dump();
+  EXPECT_GT(f["duplicate"].get<int>(), 50) << f;
+  EXPECT_GT(f["stale"].get<int>(), 50) << f;
+  EXPECT_GE(f["implausible_counts"].get<int>(), 3) << f;  // the glitch that stays, at least
+  EXPECT_GT(f["ir_stuck"].get<int>(), 100) << f;
+  EXPECT_GT(s["distance"].get<double>(), 2.0);
+  // The glitch did not reach odometry: 3000 counts are 32 cm of one wheel, a
+  // turn of ~75 degrees; SLAM's pose stays close to the truth.
+  const nlohmann::json truth = StopSimAndReadTruth();
+  EXPECT_EQ(truth["collisions"], 0);
+  EXPECT_GT(truth["faults"]["glitched"].get<int>(), 0);
+}
+
+TEST_F(E2eTest, AFloodOfForeignFramesNeitherOverrunsTheLoopNorStarvesTheApi) {
+  StartOptions o;
+  // From 10 s of robot time on: 8000 foreign frames per wall second (a 1 Mbit/s
+  // bus at full load) for 20 s of robot time.
+  o.sim_args = {"--faults", "flood:at=10:for=20:rate=8000"};
+  StartAll(o);
+  ASSERT_EQ(Ctl({"start"}), 0);
+  const auto quiet = WaitRobotTime(9.5);  // fault-free so far
+  WaitRobotTime(12);
+  double worst_call = 0;
+  nlohmann::json flooded;
+  while (true) {
+    const auto t0 = Clock::now();
+    auto s = Status();
+    worst_call = std::max(worst_call, std::chrono::duration<double>(Clock::now() - t0).count());
+    ASSERT_TRUE(s);
+    flooded = *s;
+    if (flooded["robot_time"].get<double>() >= 28) break;
+    Sleep(0.05);
+  }
+  const auto& pq = quiet["period"];
+  const auto& pf = flooded["period"];
+  const double ticks_q = pq["ticks"], ticks_f = pf["ticks"];
+  const double mean_q = pq["jitter_mean"], mean_f = pf["jitter_mean"];
+  const double mean_during = (mean_f * ticks_f - mean_q * ticks_q) / (ticks_f - ticks_q);
+  std::printf("flood: %llu frames filtered; jitter mean %.3f ms before, %.3f ms during; overruns %d -> %d; "
+              "slowest status call %.1f ms\n",
+              static_cast<unsigned long long>(flooded["can"]["filtered"].get<uint64_t>()), mean_q * 1e3,
+              mean_during * 1e3, pq["overruns"].get<int>(), pf["overruns"].get<int>(), worst_call * 1e3);
+  // 8000 frames per wall second for (28 - 10) s of robot time.
+  const double expected = 8000 * (flooded["robot_time"].get<double>() - 10) / kScale;
+  if (bus_.rfind("unix:", 0) == 0) {
+    EXPECT_GT(flooded["can"]["filtered"].get<double>(), 0.7 * expected) << "the flood did not arrive";
+  } else {
+    // SocketCAN: the kernel's id filter keeps the flood out of user space.
+    EXPECT_EQ(flooded["can"]["filtered"], 0);
+    EXPECT_EQ(flooded["frames"]["unknown_id"], 0);
+  }
+  EXPECT_LT(mean_during, 2 * mean_q + 0.001);
+  EXPECT_LT(worst_call, 0.25);
+  EXPECT_EQ(flooded["state"], "wall_follow");
+  EXPECT_GT(flooded["distance"].get<double>(), quiet["distance"].get<double>() + 2.0);
 }
 
 // The gpio-sim chip of the VM harness (vcan-scripts/run-in-vm.sh, label
