@@ -43,6 +43,7 @@ struct CoreOptions {
   double heartbeat_period_s = 0.1;        // [controller].heartbeat_period_s
   ApiSettings api;                        // [api]
   GpioSettings gpio;                      // [gpio]
+  std::string state_dir = "/var/lib/irslam";  // [state].dir: the saved map (irslamd only)
 };
 
 CoreOptions DefaultCoreOptions();

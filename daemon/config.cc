@@ -244,6 +244,14 @@ void ReadGpioLine(const char* key, drivers::GpioLineSpec* out, Section* parent, 
   s.Finish();
 }
 
+void ReadState(const json& j, control::CoreOptions* o, std::string* e) {
+  Section s(j, "state", e);
+  ReadString(j, "dir", &o->state_dir, &s);
+  s.Num("dir", nullptr, 0, 0);
+  if (o->state_dir.empty()) s.Fail("dir", "must not be empty");
+  s.Finish();
+}
+
 void ReadGpio(const json& j, control::CoreOptions* o, std::string* e) {
   Section s(j, "gpio", e);
   auto& g = o->gpio;
@@ -376,6 +384,7 @@ bool ParseConfig(std::string_view text, control::CoreOptions* options, std::stri
   ReadModel(sub("model"), &o, error);
   ReadApi(sub("api"), &o, error);
   ReadGpio(sub("gpio"), &o, error);
+  ReadState(sub("state"), &o, error);
   top.Finish();
   if (!error->empty()) return false;
   *options = o;
@@ -415,6 +424,7 @@ std::string DumpConfig(const control::CoreOptions& o) {
   };
   const auto& gp = o.gpio;
   json j = {
+      {"state", {{"dir", o.state_dir}}},
       {"gpio", {{"estop", line(gp.estop)}, {"bumper_left", line(gp.bumper_left)},
                 {"bumper_right", line(gp.bumper_right)}, {"motor_enable", line(gp.motor_enable)},
                 {"status_led", line(gp.status_led)}, {"debounce_s", gp.debounce_s}}},

@@ -33,7 +33,8 @@ Daemon::Daemon(boost::asio::io_context& io, DaemonOptions options, control::Core
       timer_(io),
       signals_(io, SIGINT, SIGTERM, SIGHUP),
       start_(Clock::now()),
-      scheduler_(static_cast<int64_t>(core.period_s / options_.time_scale * 1e9), Ns(start_)) {}
+      scheduler_(static_cast<int64_t>(core.period_s / options_.time_scale * 1e9), Ns(start_)),
+      store_(core.state_dir) {}
 
 Daemon::~Daemon() = default;
 
@@ -50,6 +51,14 @@ bool Daemon::Open(std::string* error) {
                         proto::kIrBId};
   bus_ = drivers::OpenCanBus(io_, bus_options, error);
   if (!bus_) return false;
+  // The map saved by the previous run (a bad file is moved aside, never loaded).
+  stored_ = store_.Load(&store_error_);
+  if (!store_error_.empty()) std::fprintf(stderr, "<3>irslamd: %s\n", store_error_.c_str());
+  if (stored_) {
+    std::fprintf(stderr, "<6>irslamd: map loaded from %s (save %llu, %s, %zu lines)\n", store_.path().c_str(),
+                 static_cast<unsigned long long>(stored_->seq), stored_->reason.c_str(),
+                 stored_->map.value("lines", nlohmann::json::array()).size());
+  }
   // A configured safety line that cannot be had is an error, never ignored.
   gpio_ = drivers::Gpio::Open(io_, core_options_.gpio, error);
   if (!gpio_) return false;
@@ -89,6 +98,26 @@ void Daemon::OnGpioInput(drivers::Gpio::Input input, bool active) {
     ApplyOutputs(now);
     std::fprintf(stderr, "<2>irslamd: emergency stop pressed: wheels stopped, motor driver disabled\n");
   }
+}
+
+void Daemon::SaveMap(const char* reason) {
+  if (!mission_ran_) return;  // nothing new: never overwrite the saved map with an empty one
+  StoredMap m;
+  m.seq = (stored_ ? stored_->seq : 0) + 1;
+  m.reason = reason;
+  m.map = core_->Map();
+  const auto t0 = Clock::now();
+  std::string error;
+  if (store_.Save(m, &error)) {
+    ++saves_;
+    stored_ = std::move(m);
+    store_error_.clear();
+  } else {
+    ++save_errors_;
+    store_error_ = error;
+    std::fprintf(stderr, "<3>irslamd: %s\n", error.c_str());
+  }
+  last_save_ms_ = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
 void Daemon::ApplyOutputs(double now) {
@@ -132,6 +161,8 @@ void Daemon::OnTick() {
   for (const can_frame& f : core_->Tick(now)) bus_->Send(f);
   ApplyOutputs(now);
   if (core_->state() != last_state_) {
+    // Each model completion is saved (the model step just ended).
+    if (last_state_ == control::MissionState::kModel) SaveMap("model");
     last_state_ = core_->state();
     std::fprintf(stderr, "<6>irslamd: state=%s reason=\"%s\"\n", control::ToString(last_state_),
                  core_->Status(now)["reason"].get<std::string>().c_str());
@@ -164,6 +195,7 @@ void Daemon::Shutdown() {
   core_->Stop(RobotNow());
   if (bus_) bus_->Send(core_->StopFrame());
   if (gpio_) gpio_->Close();  // motor driver disabled, LED off
+  SaveMap("shutdown");
   timer_.cancel();
   signals_.cancel();
   if (api_) api_->Close();
@@ -238,6 +270,13 @@ nlohmann::json Daemon::StatusJson() {
                      {"output", l.output}, {"active", l.active}};
   }
   s["gpio"] = {{"lines", lines}, {"events", gpio_->events()}};
+  s["map_store"] = {{"path", store_.path()},
+                    {"seq", stored_ ? stored_->seq : 0},
+                    {"saved_map", stored_.has_value()},
+                    {"saves", saves_},
+                    {"save_errors", save_errors_},
+                    {"last_save_ms", last_save_ms_},
+                    {"error", store_error_}};
   return s;
 }
 
@@ -258,7 +297,15 @@ nlohmann::json Daemon::Handle(const rpc::Request& req, const PeerCred& peer) {
                               (control ? "control" : "read") + " group");
   }
   if (req.method == "status") return rpc::MakeResult(req.id, StatusJson());
-  if (req.method == "map") return rpc::MakeResult(req.id, core_->Map());
+  if (req.method == "map") {
+    // Before any mission of this run: the map saved by the previous one.
+    if (!mission_ran_ && stored_) {
+      nlohmann::json m = stored_->map;
+      m["saved"] = {{"seq", stored_->seq}, {"reason", stored_->reason}, {"path", store_.path()}};
+      return rpc::MakeResult(req.id, m);
+    }
+    return rpc::MakeResult(req.id, core_->Map());
+  }
   if (req.method == "start") {
     const auto s = core_->state();
     if (pending_options_ &&
@@ -267,6 +314,7 @@ nlohmann::json Daemon::Handle(const rpc::Request& req, const PeerCred& peer) {
     }
     std::string why;
     if (!core_->Start(now, &why)) return rpc::MakeError(req.id, rpc::kRejected, "start rejected: " + why);
+    mission_ran_ = true;
     std::fprintf(stderr, "<6>irslamd: mission started\n");
     return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
   }
@@ -274,6 +322,7 @@ nlohmann::json Daemon::Handle(const rpc::Request& req, const PeerCred& peer) {
     core_->Stop(now);
     bus_->Send(core_->StopFrame());  // at once, not at the next period
     ApplyOutputs(now);
+    SaveMap("stop");
     std::fprintf(stderr, "<6>irslamd: stopped by request\n");
     return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
   }

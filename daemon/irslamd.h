@@ -14,6 +14,7 @@
 #include "control/robot_core.h"
 #include "daemon/access.h"
 #include "daemon/api_server.h"
+#include "daemon/map_store.h"
 #include "daemon/period_scheduler.h"
 #include "drivers/can_bus.h"
 #include "drivers/gpio.h"
@@ -55,6 +56,8 @@ class Daemon : public ApiServer::Dispatcher {
   nlohmann::json StatusJson();
   void Notify(const std::string& text);
   void OnGpioInput(drivers::Gpio::Input input, bool active);
+  // Saves the map (if a mission ran since start) atomically in the state directory.
+  void SaveMap(const char* reason);
   // Drives the GPIO outputs (motor enable, LED) from the core's state.
   void ApplyOutputs(double now);
 
@@ -76,6 +79,12 @@ class Daemon : public ApiServer::Dispatcher {
   control::MissionState last_state_ = control::MissionState::kIdle;
   bool running_ = false;
   AccessPolicy access_;
+  MapStore store_;
+  std::optional<StoredMap> stored_;  // the last map saved or loaded
+  bool mission_ran_ = false;         // a mission ran since start: its map is the one to serve/save
+  uint64_t saves_ = 0, save_errors_ = 0;
+  double last_save_ms_ = 0;
+  std::string store_error_;
 };
 
 }  // namespace irslam

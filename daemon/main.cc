@@ -19,6 +19,8 @@ int main(int argc, char** argv) {
                  "Robot time runs K times faster than wall time (tests, demos)")
       ->check(CLI::Range(0.01, 1000.0))
       ->capture_default_str();
+  std::string state_dir;
+  app.add_option("--state-dir", state_dir, "Where the map is saved (overrides state.dir)");
   int max_clients = 0;
   app.add_option("--max-clients", max_clients, "API client limit (overrides api.max_clients)");
   app.add_flag("--print-config", print_config, "Print the effective configuration and exit");
@@ -33,6 +35,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "irslamd: %s\n", error.c_str());
     return 2;
   }
+  if (!state_dir.empty()) core.state_dir = state_dir;
   options.limits.max_clients = static_cast<size_t>(max_clients > 0 ? max_clients : core.api.max_clients);
   options.limits.max_line_bytes = static_cast<size_t>(core.api.max_line_bytes);
   options.limits.idle_timeout_s = core.api.idle_timeout_s;

@@ -38,7 +38,7 @@ echo "demo: world $(basename "$world"), bus $bus, time scale ${scale}x, output i
     --truth-out "$out/truth.json" 2>"$out/irslam-sim.log" &
 pids+=($!)
 "$bin/daemon/irslamd" --can "$bus" --socket "$IRSLAM_SOCKET" --time-scale "$scale" \
-    --config "$IRSLAM_ROOT/daemon/irslamd.conf" 2>"$out/irslamd.log" &
+    --config "$IRSLAM_ROOT/daemon/irslamd.conf" --state-dir "$out/state" 2>"$out/irslamd.log" &
 pids+=($!)
 for _ in $(seq 50); do
   "$bin/daemon/irslamctl" status >/dev/null 2>&1 && break

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <random>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -81,13 +82,16 @@ class E2eTest : public ::testing::Test {
 
   // The daemon's config file in the test directory (tests may rewrite it for SIGHUP).
   std::string ConfigPath() const { return dir_ + "/irslamd.conf"; }
+  // Where the daemon saves its map.
+  std::string StateDir() const { return dir_ + "/state"; }
 
   // The test rig's config: the defaults, except that the controller-silence limit is
   // 100 ms of *wall* time (not robot time) at any time scale, so a loaded host (ASan,
   // ctest -j2) does not see short scheduling stalls as a lost controller. Tests of the
   // silence fault itself set it explicitly.
   nlohmann::json TestConfig(const nlohmann::json& over) const {
-    nlohmann::json c = {{"controller", {{"timeout_s", std::max(0.1, 0.1 * kScale)}}}};
+    nlohmann::json c = {{"controller", {{"timeout_s", std::max(0.1, 0.1 * kScale)}}},
+                        {"state", {{"dir", StateDir()}}}};
     c.merge_patch(over);
     return c;
   }
@@ -98,6 +102,11 @@ class E2eTest : public ::testing::Test {
                                     "--time-scale", std::to_string(kScale), "--truth-out", dir_ + "/truth.json"};
     sim.insert(sim.end(), o.sim_args.begin(), o.sim_args.end());
     ASSERT_TRUE(sim_.Start(sim, dir_ + "/sim.log"));
+    StartDaemon(o);
+  }
+
+  // (Re)starts the daemon alone, with the config StartAll wrote.
+  void StartDaemon(const StartOptions& o = StartOptions()) {
     ASSERT_TRUE(daemon_.Start({kDaemon, "--can", bus_, "--socket", socket_, "--time-scale",
                                std::to_string(kScale), "--config", ConfigPath()},
                               dir_ + "/daemon.log", o.daemon_env));
@@ -657,6 +666,56 @@ TEST(CommandLineTest, BadConfigAndWorldFilesGiveOneLineAndStatus2) {
     EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
   }
   std::filesystem::remove_all(dir);
+}
+
+// The map survives kill -9 at any moment: every restart finds the previous or the
+// new map intact, never a torn one (daemon/map_store.h: temp file, fsync, rename).
+TEST_F(E2eTest, KillNineAtRandomMomentsNeverLosesOrTearsTheMap) {
+  StartAll();
+  std::mt19937 rng(20261122);
+  std::uniform_real_distribution<double> drive(0.1, 0.8), after_stop(0, 0.004);
+  uint64_t last_seq = 0;
+  int rounds_with_new_map = 0;
+  for (int round = 0; round < 20; ++round) {
+    const auto s = Status().value();
+    const auto& store = s["map_store"];
+    const uint64_t seq = store["seq"];
+    // The previous map (the save was not reached) or the new one (it was); nothing else.
+    EXPECT_TRUE(seq == last_seq || seq == last_seq + 1) << "round " << round << ": " << store;
+    EXPECT_EQ(store["error"], "") << "round " << round;
+    rounds_with_new_map += seq == last_seq + 1;
+    if (seq > 0) {
+      // What the restarted daemon serves before a new mission is the saved map.
+      std::string out;
+      ASSERT_EQ(Ctl({"map", "--out", dir_ + "/saved.json"}, &out), 0) << out;
+      const std::string text = testing::ReadFile(dir_ + "/saved.json");
+      EXPECT_NE(text.find("\"saved\""), std::string::npos);
+      EXPECT_NE(text.find("\"trajectory\""), std::string::npos);
+    }
+    last_seq = seq;
+    ASSERT_EQ(Ctl({"start"}), 0);
+    Sleep(drive(rng));
+    // stop (which saves the map) and kill -9 a few milliseconds later: before,
+    // during or after the save.
+    RpcClient c;
+    std::string error;
+    ASSERT_TRUE(c.Connect(socket_, &error)) << error;
+    c.SendRaw(R"({"jsonrpc":"2.0","id":1,"method":"stop"})" "\n", &error);
+    Sleep(after_stop(rng));
+    daemon_.Signal(SIGKILL);
+    daemon_.Wait(5);
+    StartDaemon();
+  }
+  std::printf("kill -9: %d of 20 restarts found the new map, the others the previous one\n", rounds_with_new_map);
+  EXPECT_GE(rounds_with_new_map, 5) << "the kills nearly always came before the save: not a test";
+  int aside = 0, temporary = 0;
+  for (const auto& e : std::filesystem::directory_iterator(StateDir())) {
+    const std::string name = e.path().filename().string();
+    aside += name.rfind("map.json.corrupt", 0) == 0;
+    temporary += name.rfind("map.json.tmp", 0) == 0;
+  }
+  EXPECT_EQ(aside, 0) << "a torn map was found";
+  EXPECT_EQ(temporary, 0);
 }
 
 // Faults injected by the simulator (irslam-sim --faults; docs/reliability.md),
