@@ -66,7 +66,8 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
   using Item = std::pair<double, int>;
   std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
   const int s = sy * nx + sx, goal_i = gy * nx + gx;
-  const auto h = [&](int i) { return std::hypot(i % nx - gx, i / nx - gy); };
+  // (Structured bindings are not captured by lambdas in every C++20 compiler.)
+  const auto h = [&, goal_x = gx, goal_y = gy](int i) { return std::hypot(i % nx - goal_x, i / nx - goal_y); };
   g[static_cast<size_t>(s)] = 0;
   open.push({h(s), s});
   const int dx[8] = {1, -1, 0, 0, 1, 1, -1, -1}, dy[8] = {0, 0, 1, -1, 1, -1, 1, -1};

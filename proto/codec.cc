@@ -184,6 +184,13 @@ DecodeResult Decode(const can_frame& f) {
     r.error = DecodeError::kNotOurs;
     return r;
   }
+  // A standard frame's id has 11 bits; anything above them (possible on the
+  // loopback bus, which carries whatever a local process sends) is not a frame of
+  // ours (found by fuzzing).
+  if ((f.can_id & CAN_EFF_MASK) > CAN_SFF_MASK) {
+    r.error = DecodeError::kNotOurs;
+    return r;
+  }
   const MessageSpec* spec = FindMessage(f.can_id & CAN_SFF_MASK);
   if (spec == nullptr) {
     r.error = DecodeError::kNotOurs;

@@ -17,7 +17,9 @@ inline std::optional<nlohmann::json> ParseJsonText(std::string_view text, std::s
   // Only on failure: parse again with exceptions to learn where it broke.
   try {
     j = nlohmann::json::parse(text.begin(), text.end(), nullptr, true, true);
-  } catch (const nlohmann::json::parse_error& ex) {
+  } catch (const nlohmann::json::exception& ex) {
+    // parse_error, but also out_of_range (a number too large for a double, e.g.
+    // 1e999: found by fuzzing; before, it escaped and ended the process).
     std::string what = ex.what();
     const auto pos = what.find("] ");
     *error = "not valid JSON: " + (pos == std::string::npos ? what : what.substr(pos + 2));

@@ -55,6 +55,7 @@ TEST(ConfigTest, RejectsBadValuesWithOneLineNamingTheKey) {
       {R"({"sensors": {"adc_bits": 12.5}})", "config: sensors.adc_bits must be an integer"},
       {"{\"robot\": {", "config: not valid JSON"},
       {"[]", "config: the top level must be an object"},
+      {R"({"control": {"period_s": 1e999}})", "config: not valid JSON: number overflow"},
   };
   for (const auto& [text, want] : cases) {
     control::CoreOptions o = control::DefaultCoreOptions();

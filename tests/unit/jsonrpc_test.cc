@@ -36,6 +36,9 @@ TEST(JsonRpcTest, ErrorsUseTheStandardCodes) {
   EXPECT_EQ(ErrorCode(ParseRequest(R"({"jsonrpc":"2.0","id":1,"method":5})")), kInvalidRequest);
   EXPECT_EQ(ErrorCode(ParseRequest(R"({"jsonrpc":"2.0","id":{},"method":"x"})")), kInvalidRequest);
   EXPECT_EQ(ErrorCode(ParseRequest(R"({"jsonrpc":"2.0","id":1,"method":"x","params":3})")), kInvalidParams);
+  // A number beyond a double (found by fuzzing: it used to end the daemon).
+  EXPECT_EQ(ErrorCode(ParseRequest(R"({"jsonrpc":"2.0","id":1e999,"method":"status"})")), kParseError);
+  EXPECT_EQ(ErrorCode(ParseRequest("88888888887e888887")), kParseError);
 }
 
 TEST(JsonRpcTest, ErrorKeepsTheIdWhenItIsKnown) {

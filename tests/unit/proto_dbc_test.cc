@@ -132,6 +132,9 @@ TEST(CodecTest, RejectsUnknownIdsWrongDlcAndForeignFrameKinds) {
   EXPECT_EQ(Decode(f).error, DecodeError::kNotOurs);
   f.can_id = kEncoderId | CAN_RTR_FLAG;
   EXPECT_EQ(Decode(f).error, DecodeError::kNotOurs);
+  // Bits above a standard id without the EFF flag (found by fuzzing: it was UB).
+  f.can_id = kEncoderId | 0x800;
+  EXPECT_EQ(Decode(f).error, DecodeError::kNotOurs);
 }
 
 TEST(CodecTest, SpeaksCandumpNotation) {
