@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <thread>
 
 #include "daemon/config.h"
 #include "proto/codec.h"
@@ -158,6 +159,10 @@ void Daemon::OnTick() {
   const auto woke = Clock::now();
   scheduler_.OnWake(Ns(woke));
   const double now = RobotNow();
+  if (options_.test_hang_at_s >= 0 && now >= options_.test_hang_at_s) {
+    std::fprintf(stderr, "<3>irslamd: --test-hang-at: the control loop hangs now (a test of the watchdog)\n");
+    for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
+  }
   for (const can_frame& f : core_->Tick(now)) bus_->Send(f);
   ApplyOutputs(now);
   if (core_->state() != last_state_) {

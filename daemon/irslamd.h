@@ -27,6 +27,9 @@ struct DaemonOptions {
   std::string config_path;  // empty: built-in defaults
   double time_scale = 1.0;
   ApiLimits limits;
+  // Test aid (--test-hang-at): the control loop hangs for good at this robot time,
+  // so the watchdog's stall detection can be tested. Negative: never.
+  double test_hang_at_s = -1;
 };
 
 class Daemon : public ApiServer::Dispatcher {

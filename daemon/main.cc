@@ -24,6 +24,9 @@ int main(int argc, char** argv) {
   int max_clients = 0;
   app.add_option("--max-clients", max_clients, "API client limit (overrides api.max_clients)");
   app.add_flag("--print-config", print_config, "Print the effective configuration and exit");
+  app.add_option("--test-hang-at", options.test_hang_at_s,
+                 "Test aid: hang the control loop at this robot time (watchdog tests)")
+      ->group("Testing");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -57,6 +57,7 @@ struct StartOptions {
   nlohmann::json config = nlohmann::json::object();
   std::vector<std::string> daemon_env;
   std::vector<std::string> sim_args;  // e.g. {"--faults", "..."}
+  std::vector<std::string> daemon_args;
   bool wait_for_controller = true;
 };
 
@@ -107,9 +108,10 @@ class E2eTest : public ::testing::Test {
 
   // (Re)starts the daemon alone, with the config StartAll wrote.
   void StartDaemon(const StartOptions& o = StartOptions()) {
-    ASSERT_TRUE(daemon_.Start({kDaemon, "--can", bus_, "--socket", socket_, "--time-scale",
-                               std::to_string(kScale), "--config", ConfigPath()},
-                              dir_ + "/daemon.log", o.daemon_env));
+    std::vector<std::string> args = {kDaemon, "--can", bus_, "--socket", socket_, "--time-scale",
+                                     std::to_string(kScale), "--config", ConfigPath()};
+    args.insert(args.end(), o.daemon_args.begin(), o.daemon_args.end());
+    ASSERT_TRUE(daemon_.Start(args, dir_ + "/daemon.log", o.daemon_env));
     for (int i = 0; i < 400; ++i) {
       auto s = Status();
       // Ready when the daemon answers (and, if asked, hears the controller).
@@ -485,6 +487,72 @@ TEST_F(E2eTest, TellsSystemdReadyStatusAndFeedsTheWatchdog) {
   EXPECT_GE(watchdogs, 3) << all;
   daemon_.Signal(SIGTERM);
   EXPECT_EQ(daemon_.Wait(5), 0);
+}
+
+// A stand-in for systemd's watchdog: a loop that hangs stops the WATCHDOG=1 pings
+// (they are sent from the loop itself), the supervisor notices within
+// WATCHDOG_USEC, kills the daemon with SIGABRT as systemd does and starts it
+// again (Restart=on-failure); the new one is READY and has the saved map.
+TEST_F(E2eTest, AHungLoopStopsTheWatchdogPingsAndARestartFindsTheMap) {
+  const std::string notify = dir_ + "/notify.sock";
+  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", notify.c_str());
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  timeval tv{0, 20000};
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  const double watchdog_s = 1.0;  // pings every 0.5 s; a loaded host stays well inside
+  StartOptions o;
+  o.daemon_env = {"NOTIFY_SOCKET=" + notify, "WATCHDOG_USEC=" + std::to_string(static_cast<int>(watchdog_s * 1e6))};
+  o.daemon_args = {"--test-hang-at", "25"};
+  StartAll(o);
+  ASSERT_EQ(Ctl({"start"}), 0);
+  WaitRobotTime(10);
+  ASSERT_EQ(Ctl({"stop"}), 0);  // saves the map (save 1)
+  ASSERT_EQ(Status().value()["map_store"]["seq"], 1);
+  ASSERT_EQ(Ctl({"start"}), 0);
+  // Supervise: note every ping; a silence longer than WATCHDOG_USEC is a stall.
+  auto last_ping = Clock::now();
+  bool stalled = false;
+  int pings = 0;
+  const auto end = Clock::now() + std::chrono::duration<double>(WallS(40));
+  while (Clock::now() < end && !stalled) {
+    char buf[512];
+    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+    if (n > 0 && std::string(buf, static_cast<size_t>(n)).find("WATCHDOG=1") != std::string::npos) {
+      last_ping = Clock::now();
+      ++pings;
+    }
+    stalled = std::chrono::duration<double>(Clock::now() - last_ping).count() > watchdog_s;
+  }
+  ASSERT_TRUE(stalled) << "the watchdog never saw a stall";
+  EXPECT_GE(pings, 2);  // the loop was feeding it until it hung
+  EXPECT_NE(testing::ReadFile(dir_ + "/daemon.log").find("the control loop hangs now"), std::string::npos);
+  EXPECT_TRUE(daemon_.running()) << "hung, not dead: only the watchdog can tell";
+  RpcClient c;
+  std::string error;
+  if (c.Connect(socket_, &error)) {
+    EXPECT_FALSE(c.Call("status", nlohmann::json::object(), 0.5, &error)) << "a hung loop answered";
+  }
+  daemon_.Signal(SIGABRT);  // systemd's WatchdogSignal
+  daemon_.Wait(5);
+  EXPECT_FALSE(daemon_.running());
+  StartOptions again;
+  again.daemon_env = {"NOTIFY_SOCKET=" + notify};
+  StartDaemon(again);
+  bool ready = false;
+  for (int i = 0; i < 100 && !ready; ++i) {
+    char buf[512];
+    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+    ready = n > 0 && std::string(buf, static_cast<size_t>(n)).find("READY=1") != std::string::npos;
+  }
+  ::close(fd);
+  EXPECT_TRUE(ready);
+  const auto s = Status().value();
+  EXPECT_EQ(s["map_store"]["seq"], 1);
+  EXPECT_TRUE(s["map_store"]["saved_map"].get<bool>());
+  EXPECT_EQ(s["state"], "idle");
 }
 
 TEST_F(E2eTest, CandumpLogOfTheBusDecodesWithTheDbc) {

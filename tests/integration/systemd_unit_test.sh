@@ -17,5 +17,10 @@ fi
 score=$(systemd-analyze security --offline=true "$tmp/irslamd.service" 2>&1 |
         sed -n 's/.*Overall exposure level for irslamd.service: \([0-9.]*\).*/\1/p')
 echo "exposure: $score"
+# A stalled loop stops the WATCHDOG=1 pings: systemd must then kill and restart it.
+unit=$src/systemd/irslamd.service
+grep -qx 'WatchdogSec=2s' "$unit" || { echo "no WatchdogSec=2s"; exit 1; }
+grep -qx 'Restart=on-failure' "$unit" || { echo "no Restart=on-failure (restarts after a watchdog timeout)"; exit 1; }
+grep -qx 'NotifyAccess=main' "$unit" || { echo "no NotifyAccess=main"; exit 1; }
 awk -v s="$score" 'BEGIN { exit !(s != "" && s <= 3.0) }'
 echo "1 passed, 0 failed"
