@@ -145,8 +145,33 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
   }
 }
 
+RangeScan Mission::WithBumpMemory(const RangeScan& scan, const Pose2& me) const {
+  // What the bumper found (a chair leg between the beams, a corner of a box the
+  // beams miss) is seen from then on by every beam whose path the robot's body
+  // would sweep into it: the follower steers round it instead of driving into the
+  // same obstacle again.
+  RangeScan out = scan;
+  const double c = std::cos(me.theta), s = std::sin(me.theta);
+  for (const auto& b : bump_points_) {
+    if (std::hypot(b.x() - me.x, b.y() - me.y) > 1.0) continue;
+    for (int i = 0; i < kNumIrSensors; ++i) {
+      const auto& m = mounts_[static_cast<size_t>(i)];
+      const Eigen::Vector2d sensor(me.x + c * m.x - s * m.y, me.y + s * m.x + c * m.y);
+      const Eigen::Vector2d v = b - sensor;
+      const double dir = me.theta + m.theta;
+      const double along = v.x() * std::cos(dir) + v.y() * std::sin(dir);
+      const double across = -v.x() * std::sin(dir) + v.y() * std::cos(dir);
+      if (along <= 0 || std::abs(across) > 0.5 * geometry_.radius_m) continue;
+      auto& r = out.range_m[static_cast<size_t>(i)];
+      if (!r || along < *r) r = std::max(along, 0.05);
+    }
+  }
+  return out;
+}
+
 WheelCommand Mission::StepWallFollow(double t, double dt, const slam::Slam& slam,
-                                     const RangeScan& scan, bool bumped) {
+                                     const RangeScan& raw_scan, bool bumped) {
+    const RangeScan scan = WithBumpMemory(raw_scan, slam.pose());
     const Twist tw = follower_.Step(t, scan, bumped);
     // The loop's anchor: a pose after 1.5 s of steady following, so it lies on
     // the path the robot will come back along.
@@ -414,8 +439,9 @@ WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, cons
   return ToWheels({v, std::clamp(explore_.k_heading * err, -1.0, 1.0)}, dt);
 }
 
-WheelCommand Mission::StepContour(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
+WheelCommand Mission::StepContour(double t, double dt, const slam::Slam& slam, const RangeScan& raw_scan,
                                   bool bumped) {
+  const RangeScan scan = WithBumpMemory(raw_scan, slam.pose());
   const Twist tw = follower_.Step(t, scan, bumped);
   contour_turned_ += NormalizeAngle(slam.pose().theta - last_theta_);
   last_theta_ = slam.pose().theta;

@@ -83,6 +83,8 @@ class Mission {
  private:
   void Enter(MissionState s, double t, std::string reason);
   WheelCommand ToWheels(const Twist& tw, double dt);
+  // The scan with remembered bump points added as virtual readings (see .cc).
+  RangeScan WithBumpMemory(const RangeScan& scan, const Pose2& me) const;
   WheelCommand StepWallFollow(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);
   WheelCommand StepModel(double t, const slam::Slam& slam);
   WheelCommand StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);

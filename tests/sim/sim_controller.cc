@@ -79,7 +79,10 @@ void SimController::PhysicsStep(double dt) {
   if (after < radius && after < before) {
     // Blocked: the robot does not move and the motors stall (no encoder counts).
     // One collision per contact: touching again before backing off 1 cm is the same one.
-    if (!blocked_) ++collisions_;
+    if (!blocked_) {
+      ++collisions_;
+      collision_points_.push_back({t_, pose_.x, pose_.y});
+    }
     blocked_ = true;
     in_contact_ = true;
     Clearance(pose_, &bump);
@@ -187,6 +190,7 @@ nlohmann::json SimController::Truth() const {
           {"trajectory", tr},
           {"odometry", od},
           {"collisions", collisions_},
+          {"collision_points", collision_points_},
           {"min_clearance", min_clearance_}};
 }
 

@@ -45,6 +45,8 @@ class SimController {
   const Pose2& true_pose() const { return pose_; }
   const Pose2& odometry_pose() const { return odom_pose_; }
   uint64_t collisions() const { return collisions_; }
+  // Where the robot was at each contact: [t, x, y].
+  const std::vector<std::array<double, 3>>& collision_points() const { return collision_points_; }
   uint8_t bumpers() const { return bumpers_; }
   double wheel_speed_left() const { return vl_; }
   double wheel_speed_right() const { return vr_; }
@@ -79,6 +81,7 @@ class SimController {
   bool blocked_ = false;
   bool ever_commanded_ = false;
   uint64_t collisions_ = 0;
+  std::vector<std::array<double, 3>> collision_points_;  // [t, x, y] of the robot at each contact
   double min_clearance_ = 1e9;
   double next_encoder_, next_status_, next_ir_ = 0, next_truth_ = 0;
   uint8_t seq_enc_ = 0, seq_status_ = 0, seq_ir_ = 0;
