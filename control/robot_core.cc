@@ -62,7 +62,15 @@ void RobotCore::OnFrame(const can_frame& frame, double now_s) {
     slam_.AddRangeScan(scan_);
   }
   if (ev.status) {
-    bumpers_ = ev.status->bumpers;
+    // A bumper bit counts when two status frames in a row (50 ms apart) carry
+    // it: a real contact lasts (the robot is stopped against the obstacle), a
+    // flipped bit does not.
+    const uint8_t raw = ev.status->bumpers;
+    bumpers_ = raw & last_status_bumpers_;
+    const uint8_t new_bits = static_cast<uint8_t>(last_status_bumpers_ & ~bumpers_before_);
+    if (new_bits & ~raw) ++bumper_unconfirmed_;  // set in one frame only
+    bumpers_before_ = last_status_bumpers_;
+    last_status_bumpers_ = raw;
   }
 }
 
@@ -216,7 +224,8 @@ nlohmann::json RobotCore::Status(double now_s) const {
         {"implausible_time", c.implausible_time},
         {"implausible_counts", c.implausible_counts},
         {"ir_out_of_range", ir_out_of_range_},
-        {"ir_stuck", ir_stuck_}}},
+        {"ir_stuck", ir_stuck_},
+        {"bumper_unconfirmed", bumper_unconfirmed_}}},
   };
   return s;
 }

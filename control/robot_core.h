@@ -92,7 +92,9 @@ class RobotCore {
   std::array<uint16_t, kNumIrSensors> last_adc_{};
   std::array<int, kNumIrSensors> same_adc_{};  // samples in a row with the same raw value
   uint64_t ir_out_of_range_ = 0, ir_stuck_ = 0;
-  uint8_t bumpers_ = 0;       // from CTRL_STATUS
+  uint8_t bumpers_ = 0;       // from CTRL_STATUS, confirmed by two frames in a row
+  uint8_t last_status_bumpers_ = 0, bumpers_before_ = 0;
+  uint64_t bumper_unconfirmed_ = 0;
   Debouncer estop_, bump_left_, bump_right_;
   bool estop_latched_ = false;
   double last_heartbeat_ = -1e9;

@@ -33,6 +33,31 @@ constexpr double kMaxLeadS = 0.5;
 constexpr double kCountSlack = 20;
 }  // namespace
 
+bool SeqStampCheck::Accept(uint8_t seq, int64_t stamp_ms) {
+  if (seq_) {
+    const int dseq = static_cast<uint8_t>(seq - *seq_);
+    const int64_t dstamp = stamp_ms - stamp_;
+    if (learnt_ >= 8 && dseq > 0 && dseq < 64) {
+      const double expected = dseq * period_ms_;
+      const double tolerance = std::max(3.0, 0.5 * period_ms_) + 0.1 * expected;
+      if (std::abs(static_cast<double>(dstamp) - expected) > tolerance) {
+        // Three in a row that disagree: the controller changed (restarted,
+        // another rate): start again from this frame.
+        if (++rejected_ < 3) return false;
+        Reset();
+      }
+    }
+    if (seq_ && dseq == 1 && dstamp > 0 && dstamp < 1000) {
+      period_ms_ = learnt_ == 0 ? static_cast<double>(dstamp) : 0.9 * period_ms_ + 0.1 * static_cast<double>(dstamp);
+      ++learnt_;
+    }
+  }
+  rejected_ = 0;
+  seq_ = seq;
+  stamp_ = stamp_ms;
+  return true;
+}
+
 std::optional<double> MotorClient::ControllerTime(uint16_t stamp_ms, double now_s) {
   if (!clock_.initialized()) {
     host_at_clock_ = now_s;
@@ -73,6 +98,9 @@ std::optional<double> MotorClient::ControllerTime(uint16_t stamp_ms, double now_
   seq_status_.reset();
   pending_ir_a_.reset();
   last_ir_pair_seq_.reset();
+  enc_check_.Reset();
+  ir_check_.Reset();
+  status_check_.Reset();
   return static_cast<double>(clock_.Update(stamp_ms)) * 1e-3;
 }
 
@@ -105,6 +133,10 @@ MotorClient::Event MotorClient::Handle(const can_frame& frame, double now_s) {
   if (const auto* e = std::get_if<proto::EncoderCounts>(&r.message)) {
     ++counters_.encoder_frames;
     last_encoder_rx_ = now_s;  // the controller is there, whatever its data
+    if (!enc_check_.Accept(e->seq, clock_.Peek(e->timestamp_ms))) {
+      ++counters_.implausible_time;
+      return ev;
+    }
     const auto t = ControllerTime(e->timestamp_ms, now_s);
     if (!t || !ordered(*t, &last_enc_t_)) return ev;
     if (options_.max_counts_per_s > 0 && last_enc_t_ && left_.initialized()) {
@@ -132,6 +164,10 @@ MotorClient::Event MotorClient::Handle(const can_frame& frame, double now_s) {
     }
     if (pending_ir_a_) ++counters_.ir_unpaired;
     pending_ir_a_.reset();
+    if (!ir_check_.Accept(a->seq, clock_.Peek(a->timestamp_ms))) {
+      ++counters_.implausible_time;
+      return ev;
+    }
     const auto t = ControllerTime(a->timestamp_ms, now_s);
     if (!t || !ordered(*t, &last_ir_t_)) return ev;
     pending_ir_a_ = *a;
@@ -159,6 +195,10 @@ MotorClient::Event MotorClient::Handle(const can_frame& frame, double now_s) {
   } else if (const auto* s = std::get_if<proto::ControllerStatus>(&r.message)) {
     ++counters_.status_frames;
     last_status_rx_ = now_s;
+    if (!status_check_.Accept(s->seq, clock_.Peek(s->timestamp_ms))) {
+      ++counters_.implausible_time;
+      return ev;
+    }
     const auto t = ControllerTime(s->timestamp_ms, now_s);
     if (!t || !ordered(*t, &last_status_t_)) return ev;
     CheckSeq(&seq_status_, s->seq, &counters_.seq_gap_status);

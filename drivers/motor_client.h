@@ -40,6 +40,26 @@ class Unwrapper16 {
   int64_t value_ = 0;
 };
 
+// One message type's sequence number and time stamp, checked against each other:
+// consecutive frames are `period` apart, so a stamp whose step disagrees with the
+// sequence step (a flipped bit) is caught even when it is close to the clock.
+// The period is learnt from the frames themselves.
+class SeqStampCheck {
+ public:
+  // True when (seq, stamp_ms) is consistent with the last accepted frame (or
+  // nothing is known yet); then it becomes the last accepted one.
+  bool Accept(uint8_t seq, int64_t stamp_ms);
+  void Reset() { *this = SeqStampCheck(); }
+  double period_ms() const { return period_ms_; }
+
+ private:
+  std::optional<uint8_t> seq_;
+  int64_t stamp_ = 0;
+  double period_ms_ = 0;
+  int learnt_ = 0;      // period samples so far
+  int rejected_ = 0;    // in a row
+};
+
 struct MotorClientCounters {
   uint64_t encoder_frames = 0;
   uint64_t ir_samples = 0;
@@ -116,6 +136,7 @@ class MotorClient {
   int count_suspects_ = 0;                   // encoder frames with impossible counts in a row
   std::optional<double> last_enc_t_, last_ir_t_, last_status_t_;
   std::optional<uint8_t> last_ir_pair_seq_;
+  SeqStampCheck enc_check_, ir_check_, status_check_;
   double last_encoder_rx_ = -1e9;
   double last_status_rx_ = -1e9;
   uint8_t cmd_seq_ = 0;

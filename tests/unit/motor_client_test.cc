@@ -142,6 +142,25 @@ TEST(MotorClientTest, ImpossibleCountJumpsNeverReachTheCaller) {
   EXPECT_EQ(c.counters().implausible_counts, 4u);
 }
 
+TEST(MotorClientTest, AStampThatDisagreesWithItsSequenceNumberIsDropped) {
+  MotorClient c{MotorClientOptions{}};
+  // Learn the encoder period (10 ms per sequence step).
+  for (int i = 0; i < 12; ++i) {
+    ASSERT_TRUE(c.Handle(Encode(proto::EncoderCounts{static_cast<uint16_t>(1000 + 10 * i), 0, 0,
+                                                     static_cast<uint8_t>(i)}),
+                         1.0 + 0.01 * i)
+                    .ticks);
+  }
+  // Bit 8 of the stamp flipped: 256 ms ahead, near enough to the clock to pass
+  // the clock check, but 256 ms is not one sequence step.
+  EXPECT_FALSE(c.Handle(Encode(proto::EncoderCounts{1120 + 256, 0, 0, 12}), 1.12).ticks);
+  auto ok = c.Handle(Encode(proto::EncoderCounts{1130, 0, 0, 13}), 1.13);
+  ASSERT_TRUE(ok.ticks);
+  EXPECT_DOUBLE_EQ(ok.ticks->t, 1.130);
+  EXPECT_EQ(c.counters().implausible_time, 1u);
+  EXPECT_EQ(c.counters().stale, 0u);
+}
+
 TEST(MotorClientTest, ALongSilenceWithoutResetIsNotAJump) {
   MotorClient c{MotorClientOptions{}};
   c.Handle(Encode(proto::EncoderCounts{1000, 0, 0, 0}), 1.0);

@@ -4,6 +4,7 @@
 
 #include "control/robot_core.h"
 #include "control/safety.h"
+#include "proto/codec.h"
 #include "tests/sim/sim_run.h"
 
 namespace irslam::control {
@@ -158,6 +159,25 @@ TEST(BumperLineTest, AGpioBumperMakesTheRobotBackOff) {
   EXPECT_TRUE(bumped);
   EXPECT_EQ(behaviour, "backoff");
   EXPECT_LT(min_speed_after, -0.05) << "the robot backs off";
+}
+
+TEST(BumperBitTest, AControllerBumperBitCountsWhenTwoStatusFramesCarryIt) {
+  RobotCore core(DefaultCoreOptions());
+  proto::ControllerStatus st;
+  st.state = proto::ControllerState::kReady;
+  const auto send = [&](uint8_t bumpers, int i) {
+    st.bumpers = bumpers;
+    st.seq = static_cast<uint8_t>(i);
+    st.timestamp_ms = static_cast<uint16_t>(1000 + 50 * i);
+    core.OnFrame(proto::Encode(st), 1.0 + 0.05 * i);
+  };
+  send(0, 0);
+  send(proto::kBumperLeft, 1);  // a flipped bit: one frame only
+  send(0, 2);
+  send(proto::kBumperRight, 3);  // a real contact: it lasts
+  send(proto::kBumperRight, 4);
+  const auto s = core.Status(1.2);
+  EXPECT_EQ(s["frames"]["bumper_unconfirmed"], 1);
 }
 
 }  // namespace
