@@ -263,7 +263,8 @@ nlohmann::json Daemon::StatusJson() {
               {"tx_dropped", c.tx_dropped}, {"filtered", c.filtered},
               {"error_frames", c.error_frames}, {"bus_off", c.bus_off},
               {"link_up", c.link_up},      {"link_down_events", c.link_down_events},
-              {"last_error", c.last_error}};
+              {"last_error", c.last_error},
+              {"last_rx_time", c.last_rx_time},   {"kernel_timestamps", c.kernel_timestamps}};
   const auto& a = api_->stats();
   s["api"] = {{"clients", api_->client_count()}, {"requests", a.requests}, {"errors", a.errors},
               {"dropped_slow", a.dropped_slow}, {"dropped_long_line", a.dropped_long_line},

@@ -30,6 +30,8 @@ struct CanStats {
   uint64_t link_down_events = 0;
   bool link_up = true;
   std::string last_error;       // last error-frame or I/O problem, for status
+  double last_rx_time = 0;      // receive time of the last frame (CLOCK_REALTIME s)
+  bool kernel_timestamps = false;  // last_rx_time came from the kernel (SO_TIMESTAMP)
 };
 
 class CanBus {

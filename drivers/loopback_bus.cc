@@ -115,6 +115,7 @@ void LoopbackBus::Drain() {
         continue;
       }
       ++stats_.rx_frames;
+      stats_.last_rx_time = now;
       if (handler_) handler_(batch[k], now);
     }
   }

@@ -150,6 +150,10 @@ void SocketCanBus::Drain() {
       continue;
     }
     ++stats_.rx_frames;
+    if (rx_time > 0) {
+      stats_.last_rx_time = rx_time;
+      stats_.kernel_timestamps = true;
+    }
     if (handler_) handler_(f, rx_time);
   }
 }
