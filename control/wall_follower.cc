@@ -192,7 +192,6 @@ Twist WallFollower::Step(double t, const RangeScan& scan, bool bumped) {
       Enter(FollowMode::kOuterCorner, t);
       out = {o.outer_arc_speed_mps, 0};
     } else {
-      last_wall_angle_ = wall->angle_rad;
       steady_ = std::abs(wall->angle_rad) < 0.09 &&
                 std::abs(wall->distance_m - o.follow_distance_m) < 0.05;
       double omega = o.k_angle * wall->angle_rad -

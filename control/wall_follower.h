@@ -78,7 +78,6 @@ class WallFollower {
   double last_t_ = 0;
   double turned_rad_ = 0;  // rotation accumulated in the current mode
   bool has_followed_ = false;
-  double last_wall_angle_ = 0;
   bool steady_ = false;
 };
 

@@ -33,8 +33,8 @@ class PeriodScheduler {
       deadline_ns_ += missed * period_ns_;
     }
   }
-  // Work finished at now_ns: if it ran past the next deadline, that is an overrun
-  // too (counted when the late wake-up is seen).
+  // (Work that runs past the next deadline shows as a late wake-up there, and is
+  // counted as an overrun then.)
   uint64_t ticks() const { return ticks_; }
   uint64_t overruns() const { return overruns_; }
   int64_t max_late_ns() const { return max_late_ns_; }

@@ -5,8 +5,8 @@
 # bursts, a foreign-id flood, a stuck IR sensor, an encoder glitch, a controller
 # silence with reset), the mission started again each time it ends, the map read
 # now and then. Samples irslamd's RSS and open fds every 10 s of wall time into
-# OUT/soak.csv and fails when either grows (last quarter vs first quarter: RSS by
-# more than 10 %, fds at all), when the daemon died, or when a sanitizer spoke.
+# OUT/soak.csv and fails when either grows (last quarter vs second quarter: RSS
+# by more than 10 %, fds at all), when the daemon died, or when a sanitizer spoke.
 #   vcan-scripts/soak.sh [--hours H] [--time-scale K] [--sanitize] [--out DIR]
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
@@ -76,11 +76,13 @@ if grep -q "Sanitizer" "$out/irslamd.log"; then
   echo "soak: a sanitizer reported an error (see $out/irslamd.log)" >&2
   exit 1
 fi
-# Flat: the last quarter of the samples against the first quarter (after warm-up).
+# Flat: the last quarter of the samples against the second quarter (the first is
+# warm-up: the map grows during the first mission, and under ASan its quarantine
+# of freed memory, 256 MB, fills).
 awk -F, 'NR > 1 { rss[n] = $3; fds[n] = $4; n++ }
   END {
     q = int(n / 4); if (q < 1) { print "soak: too few samples"; exit 1 }
-    for (i = 0; i < q; i++) { r0 += rss[i]; r1 += rss[n - q + i]; if (fds[i] > f0) f0 = fds[i]; if (fds[n-q+i] > f1) f1 = fds[n-q+i] }
+    for (i = 0; i < q; i++) { r0 += rss[q + i]; r1 += rss[n - q + i]; if (fds[q+i] > f0) f0 = fds[q+i]; if (fds[n-q+i] > f1) f1 = fds[n-q+i] }
     r0 /= q; r1 /= q
     printf "soak: %d samples; RSS %.0f -> %.0f kB (%+.1f %%); fds %d -> %d\n", n, r0, r1, 100 * (r1 - r0) / r0, f0, f1
     if (r1 > 1.10 * r0 || f1 > f0) exit 1
