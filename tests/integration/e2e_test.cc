@@ -510,7 +510,10 @@ TEST_F(E2eTest, AHungLoopStopsTheWatchdogPingsAndARestartFindsTheMap) {
   const double watchdog_s = 1.0;  // pings every 0.5 s; a loaded host stays well inside
   StartOptions o;
   o.daemon_env = {"NOTIFY_SOCKET=" + notify, "WATCHDOG_USEC=" + std::to_string(static_cast<int>(watchdog_s * 1e6))};
-  o.daemon_args = {"--test-hang-at", "25"};
+  // The hang comes after 2.5 s of wall time at 10x; slower (software-emulated)
+  // hosts get proportionally more wall time to start, save and start again first.
+  const double hang_at = 25 * std::max(1.0, 10.0 / kScale);
+  o.daemon_args = {"--test-hang-at", std::to_string(hang_at)};
   StartAll(o);
   ASSERT_EQ(Ctl({"start"}), 0);
   WaitRobotTime(10);
@@ -521,7 +524,7 @@ TEST_F(E2eTest, AHungLoopStopsTheWatchdogPingsAndARestartFindsTheMap) {
   auto last_ping = Clock::now();
   bool stalled = false;
   int pings = 0;
-  const auto end = Clock::now() + std::chrono::duration<double>(WallS(40));
+  const auto end = Clock::now() + std::chrono::duration<double>(WallS(40) + hang_at / kScale);
   while (Clock::now() < end && !stalled) {
     char buf[512];
     const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
