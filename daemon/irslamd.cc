@@ -4,7 +4,13 @@
 
 #include <unistd.h>
 
+#include <sys/socket.h>
+#include <sys/un.h>
+
+#include <cstddef>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <thread>
 
 #include "daemon/config.h"
@@ -37,7 +43,9 @@ Daemon::Daemon(boost::asio::io_context& io, DaemonOptions options, control::Core
       scheduler_(static_cast<int64_t>(core.period_s / options_.time_scale * 1e9), Ns(start_)),
       store_(core.state_dir) {}
 
-Daemon::~Daemon() = default;
+Daemon::~Daemon() {
+  if (notify_fd_ >= 0) ::close(notify_fd_);
+}
 
 double Daemon::WallNow() const {
   return std::chrono::duration<double>(Clock::now() - start_).count();
@@ -127,7 +135,26 @@ void Daemon::ApplyOutputs(double now) {
   gpio_->SetLed(core_->StatusLed(now));
 }
 
-void Daemon::Notify(const std::string& text) { sd_notify(0, text.c_str()); }
+void Daemon::Notify(const std::string& text) {
+  // Not sd_notify(): it sends on a blocking socket, and a notify socket whose
+  // queue is full (net.unix.max_dgram_qlen) would stall the control loop. A
+  // message that does not fit now is dropped and counted; the next WATCHDOG=1
+  // comes half a watchdog interval later.
+  const char* path = std::getenv("NOTIFY_SOCKET");
+  if (path == nullptr || (path[0] != '/' && path[0] != '@')) return;
+  if (notify_fd_ < 0) notify_fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+  if (notify_fd_ < 0) return;
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  const size_t n = std::min(std::strlen(path), sizeof addr.sun_path - 1);
+  std::memcpy(addr.sun_path, path, n);
+  if (addr.sun_path[0] == '@') addr.sun_path[0] = '\0';  // abstract namespace
+  const auto len = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + n);
+  if (::sendto(notify_fd_, text.data(), text.size(), MSG_DONTWAIT | MSG_NOSIGNAL,
+               reinterpret_cast<sockaddr*>(&addr), len) < 0) {
+    ++notify_dropped_;
+  }
+}
 
 int Daemon::Run() {
   running_ = true;
@@ -270,6 +297,7 @@ nlohmann::json Daemon::StatusJson() {
               {"dropped_slow", a.dropped_slow}, {"dropped_long_line", a.dropped_long_line},
               {"rejected_full", a.rejected_full}};
   s["config_pending"] = pending_options_.has_value();
+  s["notify_dropped"] = notify_dropped_;
   nlohmann::json lines = nlohmann::json::object();
   for (const auto& l : gpio_->lines()) {
     lines[l.role] = {{"chip", l.chip}, {"label", l.label}, {"offset", l.offset}, {"name", l.name},

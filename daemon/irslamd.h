@@ -82,6 +82,8 @@ class Daemon : public ApiServer::Dispatcher {
   control::MissionState last_state_ = control::MissionState::kIdle;
   bool running_ = false;
   AccessPolicy access_;
+  int notify_fd_ = -1;           // our own non-blocking NOTIFY_SOCKET sender
+  uint64_t notify_dropped_ = 0;  // notifications that did not fit
   MapStore store_;
   std::optional<StoredMap> stored_;  // the last map saved or loaded
   bool mission_ran_ = false;         // a mission ran since start: its map is the one to serve/save

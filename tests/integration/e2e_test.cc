@@ -563,6 +563,27 @@ TEST_F(E2eTest, AHungLoopStopsTheWatchdogPingsAndARestartFindsTheMap) {
   EXPECT_EQ(s["state"], "idle");
 }
 
+// A notify socket nobody reads (its queue full after net.unix.max_dgram_qlen
+// messages) must not stall the control loop: notifications that do not fit are
+// dropped and counted.
+TEST_F(E2eTest, AnUndrainedNotifySocketDoesNotStallTheLoop) {
+  const std::string notify = dir_ + "/notify.sock";
+  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", notify.c_str());
+  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  StartOptions o;
+  o.daemon_env = {"NOTIFY_SOCKET=" + notify, "WATCHDOG_USEC=100000"};  // a ping every 50 ms
+  StartAll(o);
+  Sleep(2);  // ~40 pings, never read
+  const auto s = Status();
+  ASSERT_TRUE(s) << "the daemon stalled on its notify socket";
+  EXPECT_GT((*s)["notify_dropped"].get<int>(), 0);
+  EXPECT_GT((*s)["period"]["ticks"].get<int>(), 50);
+  ::close(fd);
+}
+
 TEST_F(E2eTest, CandumpLogOfTheBusDecodesWithTheDbc) {
   StartAll();
   ASSERT_EQ(Ctl({"start"}), 0);
