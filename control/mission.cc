@@ -33,8 +33,10 @@ void Mission::Enter(MissionState s, double t, std::string reason) {
   state_ = s;
   state_since_ = t;
   reason_ = std::move(reason);
+  if (s == MissionState::kGoToP1) go_to_bumps_ = 0;
   if (s == MissionState::kWallFollow) {
     follower_.Reset();
+    follower_.SetOrbitCorners(false);
     have_anchor_ = false;
     progress_t_ = t;
   }
@@ -230,6 +232,28 @@ Eigen::Vector2d Rotate(const Eigen::Vector2d& v, double a) {
 
 }  // namespace
 
+void Mission::BeginEscape(double t, const Pose2& me) {
+  // Away from the contact: its bearing from the bumper bits (left, right, both:
+  // ahead), then turn to face away from it and drive off. (A round robot can
+  // always turn on the spot; backing up would run into what is behind.)
+  const bool left = bumpers_now_ & 1, right = bumpers_now_ & 2;
+  const double contact = left && !right ? 0.6 : right && !left ? -0.6 : 0.0;
+  escape_heading_ = NormalizeAngle(me.theta + contact + M_PI);
+  escape_turned_ = false;
+  backoff_until_ = t + 6.0;  // at most; ends after the drive off
+  last_plan_ = -1e9;         // replan around what was hit once clear
+}
+
+WheelCommand Mission::Escape(double t, double dt, const Pose2& me) {
+  if (!escape_turned_) {
+    const double err = NormalizeAngle(escape_heading_ - me.theta);
+    if (std::abs(err) > 0.25) return ToWheels({0, std::clamp(2.0 * err, -0.9, 0.9)}, dt);
+    escape_turned_ = true;
+    backoff_until_ = t + 1.0;  // drive off for 1 s
+  }
+  return ToWheels({0.08, 0}, dt);
+}
+
 WheelCommand Mission::StepModel(double t, const slam::Slam& slam) {
   // Paper §5: model the room from the line map, then complete what is incomplete.
   const EnvironmentModel& m = modeler_.Update(slam.map_lines(), slam.map_trajectory());
@@ -267,12 +291,15 @@ WheelCommand Mission::StepModel(double t, const slam::Slam& slam) {
               std::to_string(complete) + " complete");
     return Halt();
   }
-  // Step 2: the nearest incomplete free object, and its line nearest the robot.
+  // Step 2: the nearest incomplete object, and its line nearest the robot. (The
+  // paper visits incomplete free objects; a wall-contact object seen only in
+  // part from the wall-following loop - compound furniture, a side too far from
+  // the loop - is visited too, and its free sides followed.)
   const Pose2 me = slam.map_pose();
   const ObjectModel* target = nullptr;
   double best = 1e18;
   for (const auto& o : m.objects) {
-    if (o.kind != ObjectKind::kFree || o.complete || o.given_up) continue;
+    if (o.complete || o.given_up) continue;
     const double d = std::hypot(0.5 * (o.box.xmin + o.box.xmax) - me.x, 0.5 * (o.box.ymin + o.box.ymax) - me.y);
     if (d < best) {
       best = d;
@@ -283,6 +310,7 @@ WheelCommand Mission::StepModel(double t, const slam::Slam& slam) {
   // side's centre, on the side it was seen from (the outside), heading along it
   // with the object on the right.
   target_ = target->id;
+  target_at_wall_ = target->kind == ObjectKind::kWallContact;
   const auto lines = slam.map_lines();
   const auto trajectory = slam.map_trajectory();
   std::vector<std::pair<double, const slam::LineFeature*>> sides;
@@ -344,11 +372,22 @@ bool Mission::Replan(const slam::Slam& slam, const RangeScan& scan) {
   po.hard_m = geometry_.radius_m + 0.02;
   auto path = PlanPath(obstacles, {me.x, me.y}, p1_, po);
   if (!path) return false;
+  // Keep the path being followed while it is still clear and not much longer
+  // than the new one: near a tight spot two ways round are often about as long,
+  // and switching between them at every replan left the robot turning on the
+  // spot from one to the other.
+  if (!path_.empty() && (path_.back() - p1_).norm() < 1e-6) {
+    std::vector<Eigen::Vector2d> rest = path_;
+    rest.insert(rest.begin(), Eigen::Vector2d(me.x, me.y));
+    if (PathLength(rest) < 1.25 * PathLength(*path) + 0.2 && PathClear(obstacles, rest, po.hard_m, 0.3)) {
+      return true;
+    }
+  }
   path_ = *path;
   return true;
 }
 
-WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
+WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& raw_scan,
                                bool bumped) {
   if (t - state_since_ > explore_.go_to_timeout_s) {
     if (target_ == 0) {
@@ -360,23 +399,49 @@ WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, cons
     Enter(MissionState::kModel, t, "object " + std::to_string(target_) + ": P1 not reached");
     return Halt();
   }
+  // Stuck (turning on the spot, no way found through what the beams see): after
+  // go_to_stuck_s without getting 0.3 m further, give the goal up.
+  {
+    const Pose2 p = slam.pose();
+    if (go_progress_t_ < state_since_ || std::hypot(p.x - go_progress_at_.x(), p.y - go_progress_at_.y()) > 0.3) {
+      go_progress_t_ = t;
+      go_progress_at_ = {p.x, p.y};
+    } else if (t - go_progress_t_ > explore_.go_to_stuck_s && t >= backoff_until_) {
+      if (target_ == 0) {
+        survey_turned_ = -1;
+        Enter(MissionState::kModel, t, "survey point: no way found");
+        return Halt();
+      }
+      modeler_.GiveUp(target_, "no way to P1 found");
+      Enter(MissionState::kModel, t, "object " + std::to_string(target_) + ": no way to P1 found");
+      return Halt();
+    }
+  }
   if (bumped && t >= backoff_until_) {
-    backoff_until_ = t + 0.8;
-    backoff_bumpers_ = bumpers_now_;
-    last_plan_ = -1e9;  // replan around what was hit once clear
+    if (go_to_bumps_ >= 1) {
+      // A second contact on the way: the way there is blocked by things the
+      // beams miss (chair legs). Do not push on through them: give the goal up
+      // (the next behaviour gets clear of the contact first).
+      if (target_ == 0) {
+        survey_turned_ = -1;
+        Enter(MissionState::kModel, t, "survey point blocked by obstacles the sensors miss");
+        return Halt();
+      }
+      modeler_.GiveUp(target_, "the way to P1 is blocked by obstacles the sensors miss");
+      Enter(MissionState::kModel, t, "object " + std::to_string(target_) + ": way to P1 blocked");
+      return Halt();
+    }
+    ++go_to_bumps_;
+    BeginEscape(t, slam.pose());
   }
-  if (t < backoff_until_) {
-    // Get clear: straight back from a frontal hit; from a side hit, turn on the
-    // spot away from it (backing could run into it when it is beside or behind).
-    if (backoff_bumpers_ == 1) return ToWheels({0, -0.9}, dt);
-    if (backoff_bumpers_ == 2) return ToWheels({0, 0.9}, dt);
-    return ToWheels({-0.08, 0}, dt);
-  }
+  if (t < backoff_until_) return Escape(t, dt, slam.pose());
   const Pose2 me = slam.pose();
   const Eigen::Vector2d pos(me.x, me.y);
   // Anything any sensor sees close ahead (not only the front ones: a box corner
-  // can sit between the beams of the front sensors) stops the robot and makes it
-  // plan around what it sees.
+  // can sit between the beams of the front sensors), or what the bumper found
+  // there before (a chair leg the beams miss), stops the robot and makes it plan
+  // around it.
+  const RangeScan scan = WithBumpMemory(raw_scan, me);
   std::optional<double> front = follower_.FrontDistance(scan);
   for (int i = 0; i < kNumIrSensors; ++i) {
     if (!scan.range_m[i]) continue;
@@ -413,7 +478,9 @@ WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, cons
     const double err = NormalizeAngle(p1_heading_ - me.theta);
     if (std::abs(err) < explore_.heading_tolerance_rad) {
       follower_.StartFollowing(t);
+      follower_.SetOrbitCorners(true);
       contour_turned_ = 0;
+      contour_loop_.clear();
       last_theta_ = me.theta;
       windows_seen_ = slam.stats().windows;
       Enter(MissionState::kContourFollow, t, "contour following object " + std::to_string(target_));
@@ -445,6 +512,10 @@ WheelCommand Mission::StepContour(double t, double dt, const slam::Slam& slam, c
   const Twist tw = follower_.Step(t, scan, bumped);
   contour_turned_ += NormalizeAngle(slam.pose().theta - last_theta_);
   last_theta_ = slam.pose().theta;
+  const Pose2 here = slam.map_pose();
+  if (contour_loop_.empty() || (contour_loop_.back() - Eigen::Vector2d(here.x, here.y)).norm() > 0.05) {
+    contour_loop_.emplace_back(here.x, here.y);
+  }
   if (slam.stats().windows != windows_seen_) {
     // New lines may have completed the object.
     windows_seen_ = slam.stats().windows;
@@ -459,13 +530,28 @@ WheelCommand Mission::StepContour(double t, double dt, const slam::Slam& slam, c
   if (contour_turned_ < -2 * M_PI - 0.3) {
     // Walked all round it. With three sides mapped the fourth is where the robot
     // just went round: the model closes it; with fewer, say so and carry on.
-    if (modeler_.CloseByContour(target_)) {
+    if (modeler_.CloseByContour(target_, contour_loop_, slam.map_lines(), slam.map_trajectory())) {
       Enter(MissionState::kModel, t, "object " + std::to_string(target_) + " complete (contour closed)");
       return Halt();
     }
     modeler_.GiveUp(target_, "contour followed all round, still incomplete");
     Enter(MissionState::kModel, t, "object " + std::to_string(target_) + " incomplete after a full contour");
     return Halt();
+  }
+  if (target_at_wall_ && t - state_since_ > 5.0) {
+    // A wall-contact object has no way round: its free sides have been followed
+    // once the robot has left it along the wall.
+    const EnvironmentModel& m = modeler_.model();
+    for (const auto& o : m.objects) {
+      if (o.id != target_) continue;
+      const double dx = std::max({o.box.xmin - here.x, 0.0, here.x - o.box.xmax});
+      const double dy = std::max({o.box.ymin - here.y, 0.0, here.y - o.box.ymax});
+      if (std::hypot(dx, dy) > follow_distance_m_ + explore_.contour_leave_m) {
+        modeler_.GiveUp(target_, "free sides followed, still incomplete");
+        Enter(MissionState::kModel, t, "object " + std::to_string(target_) + " incomplete after following its free sides");
+        return Halt();
+      }
+    }
   }
   if (t - state_since_ > explore_.contour_timeout_s) {
     modeler_.GiveUp(target_, "contour following timed out");

@@ -49,7 +49,11 @@ struct ExploreOptions {
   double replan_period_s = 2.0;
   double front_stop_m = 0.32;         // unmapped obstacle ahead while going to P1: stop, replan
   double go_to_timeout_s = 90;        // give the object up if P1 is not reached by then
+  double go_to_stuck_s = 25;          // ... or if the robot got no 0.3 m further for this long
   double contour_timeout_s = 150;     // give up completing an object after this
+  double contour_leave_m = 0.6;       // a wall-contact object's free sides have been followed
+                                      // once the robot is this much farther than the follow
+                                      // distance from it (it follows the wall away)
   bool survey_centre = true;          // once: go to the room's centre and look round, to find
                                       // free objects too far from the walls to be seen
 };
@@ -90,6 +94,9 @@ class Mission {
   WheelCommand StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);
   WheelCommand StepContour(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);
   bool Replan(const slam::Slam& slam, const RangeScan& scan);
+  // Getting clear of a contact during a go-to: turn away from it, drive off.
+  void BeginEscape(double t, const Pose2& me);
+  WheelCommand Escape(double t, double dt, const Pose2& me);
   WheelCommand Halt() {
     last_cmd_ = {};
     return {};
@@ -112,9 +119,15 @@ class Mission {
   double state_since_ = 0;
   double last_plan_ = -1e9;
   double backoff_until_ = -1e9;
-  uint8_t backoff_bumpers_ = 0;
+  double escape_heading_ = 0;
+  bool escape_turned_ = false;
   uint8_t bumpers_now_ = 0;
   int windows_seen_ = 0;
+  int go_to_bumps_ = 0;  // contacts since the go-to began
+  double go_progress_t_ = -1;  // the go-to last got 0.3 m further at this time ...
+  Eigen::Vector2d go_progress_at_ = Eigen::Vector2d::Zero();  // ... from here
+  std::vector<Eigen::Vector2d> contour_loop_;  // map frame: where contour following went
+  bool target_at_wall_ = false;                // the target is a wall-contact object
   double contour_turned_ = 0;
   double last_theta_ = 0;
   MissionState state_ = MissionState::kIdle;

@@ -37,8 +37,8 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
     return std::pair<int, int>{static_cast<int>(std::lround((p.x() - lo.x()) / o.resolution_m)),
                                static_cast<int>(std::lround((p.y() - lo.y()) / o.resolution_m))};
   };
-  // 0 free, 1 within the inflation (soft), 2 within hard_m.
-  std::vector<uint8_t> blocked(static_cast<size_t>(nx * ny), 0);
+  // Clearance of each cell: the distance to the nearest obstacle, up to the inflation.
+  std::vector<float> clear(static_cast<size_t>(nx * ny), static_cast<float>(o.inflation_m));
   for (const auto& ob : obstacles) {
     // Only cells near the obstacle's bounding box can be blocked by it.
     const Eigen::Vector2d a = ob.a.cwiseMin(ob.b).array() - o.inflation_m;
@@ -47,19 +47,16 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
     const auto [x1, y1] = cell(b);
     for (int ix = std::max(0, x0); ix <= std::min(nx - 1, x1); ++ix) {
       for (int iy = std::max(0, y0); iy <= std::min(ny - 1, y1); ++iy) {
-        const double d = SegmentDistance(centre(ix, iy), ob);
-        auto& cellb = blocked[static_cast<size_t>(iy * nx + ix)];
-        if (d < o.hard_m) {
-          cellb = 2;
-        } else if (d < o.inflation_m) {
-          cellb = std::max<uint8_t>(cellb, 1);
-        }
+        auto& c = clear[static_cast<size_t>(iy * nx + ix)];
+        c = std::min(c, static_cast<float>(SegmentDistance(centre(ix, iy), ob)));
       }
     }
   }
   const auto [sx, sy] = cell(start);
   const auto [gx, gy] = cell(goal);
-  if (gx < 0 || gy < 0 || gx >= nx || gy >= ny || blocked[static_cast<size_t>(gy * nx + gx)]) return std::nullopt;
+  if (gx < 0 || gy < 0 || gx >= nx || gy >= ny || clear[static_cast<size_t>(gy * nx + gx)] < o.inflation_m) {
+    return std::nullopt;
+  }
   const int n = nx * ny;
   std::vector<double> g(static_cast<size_t>(n), 1e18);
   std::vector<int> from(static_cast<size_t>(n), -1);
@@ -81,11 +78,14 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
       const int jx = ix + dx[k], jy = iy + dy[k];
       if (jx < 0 || jy < 0 || jx >= nx || jy >= ny) continue;
       const int j = jy * nx + jx;
-      // Soft-blocked cells may be crossed only near the start (to get out of a
-      // tight spot); hard-blocked cells never.
-      const uint8_t b = blocked[static_cast<size_t>(j)];
-      if (b == 2) continue;
-      if (b == 1 && std::hypot(jx - sx, jy - sy) * o.resolution_m > o.inflation_m + o.resolution_m) continue;
+      // Cells within the inflation may be crossed only near the start, to get out
+      // of a tight spot; within hard_m only moving away from the obstacle (the
+      // robot may stand that close to where a mapped side is assumed to go on).
+      const float cj = clear[static_cast<size_t>(j)];
+      if (cj < o.inflation_m) {
+        if (std::hypot(jx - sx, jy - sy) * o.resolution_m > o.inflation_m + o.resolution_m) continue;
+        if (cj < o.hard_m && cj < clear[static_cast<size_t>(i)]) continue;
+      }
       const double c = g[static_cast<size_t>(i)] + (k < 4 ? 1.0 : M_SQRT2);
       if (c < g[static_cast<size_t>(j)]) {
         g[static_cast<size_t>(j)] = c;
@@ -106,6 +106,31 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
   }
   path.push_back(goal);
   return path;
+}
+
+bool PathClear(const std::vector<Obstacle>& obstacles, const std::vector<Eigen::Vector2d>& path,
+               double clearance_m, double skip_m) {
+  double along = 0;
+  for (size_t i = 0; i + 1 < path.size(); ++i) {
+    const Eigen::Vector2d d = path[i + 1] - path[i];
+    const double len = d.norm();
+    for (double u = 0; u <= len; u += 0.05) {
+      if (along + u >= skip_m) {
+        const Eigen::Vector2d p = path[i] + (len > 0 ? u / len : 0.0) * d;
+        for (const auto& ob : obstacles) {
+          if (SegmentDistance(p, ob) < clearance_m) return false;
+        }
+      }
+    }
+    along += len;
+  }
+  return true;
+}
+
+double PathLength(const std::vector<Eigen::Vector2d>& path) {
+  double l = 0;
+  for (size_t i = 0; i + 1 < path.size(); ++i) l += (path[i + 1] - path[i]).norm();
+  return l;
 }
 
 }  // namespace irslam::control

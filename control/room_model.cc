@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 namespace irslam::control {
 namespace {
@@ -28,28 +29,71 @@ double Overlap1d(double a0, double a1, double b0, double b1) {
   return std::min(a1, b1) - std::max(a0, b0);
 }
 
+// The object's box from its faces. A side's offset is its best-known coordinate
+// (the EKF estimates it from every point along the side), while its end points
+// are where the beams stopped hitting it (short of the corner, or past it by the
+// noise): so each edge of the box is the outermost side facing that way - a
+// vertical side seen from the left for xmin, and so on - and the extreme end
+// point only where no side faces that way (an open, unseen face), or where the
+// ends reach well beyond every face (compound furniture, seen in part).
+Box FaceBox(const std::vector<Side>& sides, const std::vector<size_t>& group, const Box& ends) {
+  constexpr double kBeyond = 0.15;  // ends this far past a face: that face is not the edge
+  Box b = ends;
+  std::optional<double> xmin, xmax, ymin, ymax;
+  for (size_t i : group) {
+    const Side& s = sides[i];
+    auto& lo = s.horizontal ? ymin : xmin;
+    auto& hi = s.horizontal ? ymax : xmax;
+    if (s.seen_from < 0) lo = lo ? std::min(*lo, s.c) : s.c;
+    if (s.seen_from > 0) hi = hi ? std::max(*hi, s.c) : s.c;
+  }
+  if (xmin && *xmin < ends.xmin + kBeyond) b.xmin = *xmin;
+  if (ymin && *ymin < ends.ymin + kBeyond) b.ymin = *ymin;
+  if (xmax && *xmax > ends.xmax - kBeyond) b.xmax = *xmax;
+  if (ymax && *ymax > ends.ymax - kBeyond) b.ymax = *ymax;
+  return b;
+}
+
 }  // namespace
 
 const char* ToString(ObjectKind k) { return k == ObjectKind::kWallContact ? "wall_contact" : "free"; }
 
 int EnvironmentModel::pending() const {
   int n = 0;
-  for (const auto& o : objects) n += o.kind == ObjectKind::kFree && !o.complete && !o.given_up;
+  for (const auto& o : objects) n += !o.complete && !o.given_up;
   return n;
 }
 
-bool Modeler::CloseByContour(int object_id) {
-  for (auto& o : model_.objects) {
-    if (o.id != object_id) continue;
-    // Remembered either way: a third side found later still closes it.
-    closed_by_contour_.push_back(object_id);
-    if (o.lines.size() < 3) return false;
-    o.complete = true;
-    o.note = "one side inferred from the contour";
-    return true;
+bool Modeler::CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& loop,
+                             const std::vector<slam::LineFeature>& lines,
+                             const std::vector<slam::TrajectoryPoint>& trajectory) {
+  // Remembered either way: a third side found later still closes it.
+  closed_by_contour_.push_back(object_id);
+  if (loop.size() >= 3) contour_loops_.push_back(loop);
+  Update(lines, trajectory);
+  for (const auto& o : model_.objects) {
+    if (o.id == object_id) return o.complete;
   }
   return false;
 }
+
+namespace {
+
+// Even-odd rule.
+bool InsidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
+  bool in = false;
+  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    const Eigen::Vector2d& a = poly[i];
+    const Eigen::Vector2d& b = poly[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
+      in = !in;
+    }
+  }
+  return in;
+}
+
+}  // namespace
 
 void Modeler::GiveUp(int object_id, const std::string& why) {
   given_up_.emplace_back(object_id, why);
@@ -150,9 +194,18 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
     return (end_h < tight && (end_v < loose || (h.c > v.a0 && h.c < v.a1))) ||
            (end_v < tight && (end_h < loose || (v.c > h.a0 && v.c < h.a1)));
   };
+  // Sides inside one contour loop the robot has gone all round are one object.
+  std::vector<int> loop_of(rest.size(), -1);
+  for (size_t i = 0; i < rest.size(); ++i) {
+    const Side& sd = sides[rest[i]];
+    const Eigen::Vector2d mid = 0.5 * (sd.End(0) + sd.End(1));
+    for (size_t k = 0; k < contour_loops_.size(); ++k) {
+      if (InsidePolygon(contour_loops_[k], mid)) loop_of[i] = static_cast<int>(k);
+    }
+  }
   for (size_t i = 0; i < rest.size(); ++i) {
     for (size_t j = i + 1; j < rest.size(); ++j) {
-      if (meets(sides[rest[i]], sides[rest[j]])) {
+      if ((loop_of[i] >= 0 && loop_of[i] == loop_of[j]) || meets(sides[rest[i]], sides[rest[j]])) {
         parent[static_cast<size_t>(Find(parent, static_cast<int>(i)))] = Find(parent, static_cast<int>(j));
       }
     }
@@ -174,8 +227,12 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
     return std::abs(p.x() - r.xmin) < o.wall_contact_m || std::abs(p.x() - r.xmax) < o.wall_contact_m ||
            std::abs(p.y() - r.ymin) < o.wall_contact_m || std::abs(p.y() - r.ymax) < o.wall_contact_m;
   };
+  std::vector<bool> side_in_loop(sides.size(), false);
+  for (size_t i = 0; i < rest.size(); ++i) side_in_loop[rest[i]] = loop_of[i] >= 0;
+  std::vector<bool> group_in_loop;
   for (const auto& g : groups) {
     ObjectModel obj;
+    group_in_loop.push_back(std::any_of(g.begin(), g.end(), [&](size_t i) { return side_in_loop[i]; }));
     Box b{1e18, 1e18, -1e18, -1e18};
     for (size_t i : g) {
       const Side& s = sides[i];
@@ -223,14 +280,15 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
     obj.kind = (touches_wall || box_at_wall) ? ObjectKind::kWallContact : ObjectKind::kFree;
     const size_t needed = obj.kind == ObjectKind::kWallContact ? 3 : 4;
     obj.complete = obj.open_ends == 0 && obj.lines.size() >= needed;
-    obj.box = b;
+    obj.box = FaceBox(sides, g, b);
     std::sort(obj.lines.begin(), obj.lines.end());
     m.objects.push_back(obj);
   }
 
   // Stable ids: an object keeps the id of the previous object it overlaps most.
   std::vector<bool> taken(model_.objects.size(), false);
-  for (auto& obj : m.objects) {
+  for (size_t gi = 0; gi < m.objects.size(); ++gi) {
+    ObjectModel& obj = m.objects[gi];
     double best = 0;
     int best_k = -1;
     for (size_t k = 0; k < model_.objects.size(); ++k) {
@@ -250,8 +308,10 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
     } else {
       obj.id = next_id_++;
     }
-    for (int cid : closed_by_contour_) {
-      if (cid == obj.id && !obj.complete && obj.lines.size() >= 3) {
+    const bool contoured = group_in_loop[gi] || std::find(closed_by_contour_.begin(), closed_by_contour_.end(),
+                                                           obj.id) != closed_by_contour_.end();
+    {
+      if (contoured && !obj.complete && obj.lines.size() >= 3) {
         obj.complete = true;
         obj.note = "one side inferred from the contour";
       }

@@ -54,7 +54,7 @@ struct ObjectModel {
 struct EnvironmentModel {
   RoomModel room;
   std::vector<ObjectModel> objects;
-  // Incomplete free objects not given up: what exploration still has to visit.
+  // Incomplete objects not given up: what exploration still has to visit.
   int pending() const;
 };
 
@@ -66,10 +66,15 @@ class Modeler {
   // which side each line was seen. Object ids persist across calls.
   const EnvironmentModel& Update(const std::vector<slam::LineFeature>& lines,
                                  const std::vector<slam::TrajectoryPoint>& trajectory);
-  // The robot has followed the object's contour all round: if at least three of
-  // its sides are mapped, the missing one is inferred from their extents and the
-  // object counts as complete (noted). False if fewer sides are known.
-  bool CloseByContour(int object_id);
+  // The robot has followed the object's contour all round, along `loop` (map
+  // frame): every mapped side inside the loop belongs to this one object (the
+  // pieces of compound furniture, and sides whose ends were seen short of their
+  // corners, are joined). If at least three of its sides are mapped, a missing
+  // one is inferred from their extents and the object counts as complete
+  // (noted). False if fewer sides are known.
+  bool CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& loop,
+                      const std::vector<slam::LineFeature>& lines,
+                      const std::vector<slam::TrajectoryPoint>& trajectory);
   // Marks an object as not completable (e.g. unreachable); it stays incomplete.
   void GiveUp(int object_id, const std::string& why);
   const EnvironmentModel& model() const { return model_; }
@@ -80,6 +85,7 @@ class Modeler {
   int next_id_ = 1;
   std::vector<std::pair<int, std::string>> given_up_;
   std::vector<int> closed_by_contour_;
+  std::vector<std::vector<Eigen::Vector2d>> contour_loops_;  // map frame
 };
 
 }  // namespace irslam::control

@@ -84,7 +84,7 @@ std::optional<WallEstimate> WallFollower::RightWall(const RangeScan& scan) const
   }
   if (r0) {
     const Point a = Hit(mounts_[kRight], *r0);
-    if (-a.y < lost) return WallEstimate{-a.y, 0.0};
+    if (-a.y < lost) return WallEstimate{-a.y, 0.0, !r1};
   }
   if (r1) {
     // Only the diagonal sensor: assume the wall is parallel.
@@ -191,6 +191,20 @@ Twist WallFollower::Step(double t, const RangeScan& scan, bool bumped) {
     } else if (!wall) {
       Enter(FollowMode::kOuterCorner, t);
       out = {o.outer_arc_speed_mps, 0};
+    } else if (wall->corner && orbit_corners_) {
+      // Only a corner beside the robot (a wall along the right would be seen by
+      // the diagonal sensor too): go round it at the follow distance - the
+      // curvature of that circle, corrected by the distance error - until the
+      // next side comes into view. (Taken as a wall alongside, the corner drew
+      // the robot into wide circles that never came close enough to see the
+      // sides of a small box.)
+      // Only farther than the follow distance, and fully from 5 cm beyond it:
+      // the side sensor may still see the side's end short of the corner, and
+      // turning then would cut the corner.
+      const double v = o.outer_arc_speed_mps;
+      const double err = wall->distance_m - o.follow_distance_m;
+      const double omega = -v / o.follow_distance_m * std::clamp(err / 0.05, 0.0, 1.0) - o.k_distance * err;
+      out = {v, std::clamp(omega, -o.max_turn_rate_rad_s, o.max_turn_rate_rad_s)};
     } else {
       steady_ = std::abs(wall->angle_rad) < 0.09 &&
                 std::abs(wall->distance_m - o.follow_distance_m) < 0.05;

@@ -42,6 +42,9 @@ struct Twist {
 struct WallEstimate {
   double distance_m = 0;
   double angle_rad = 0;  // wall direction relative to the heading (+: wall turns left/closer)
+  // Only the side sensor sees it (the diagonal one sees nothing within range):
+  // not a wall alongside but its end - the corner being passed.
+  bool corner = false;
 };
 
 class WallFollower {
@@ -57,6 +60,10 @@ class WallFollower {
   void Leave(double t);
   // Start following at once (the robot was placed beside a side, heading along it).
   void StartFollowing(double t);
+  // Go round a corner seen by the side sensor alone at the follow distance
+  // (contour following of free objects: small boxes, short sides) instead of
+  // taking it as a wall alongside (following the room, tuned for its accuracy).
+  void SetOrbitCorners(bool on) { orbit_corners_ = on; }
   FollowMode mode() const { return mode_; }
   // True once a wall has been found and followed.
   bool following() const { return has_followed_; }
@@ -79,6 +86,7 @@ class WallFollower {
   double turned_rad_ = 0;  // rotation accumulated in the current mode
   bool has_followed_ = false;
   bool steady_ = false;
+  bool orbit_corners_ = false;
 };
 
 }  // namespace irslam::control

@@ -277,6 +277,8 @@ void ReadExploration(const json& j, control::CoreOptions* o, std::string* e) {
   s.Num("front_stop_m", &x.front_stop_m, 0.1, 2);
   s.Num("go_to_timeout_s", &x.go_to_timeout_s, 1, 3600);
   s.Num("contour_timeout_s", &x.contour_timeout_s, 1, 3600);
+  s.Num("contour_leave_m", &x.contour_leave_m, 0.05, 10);
+  s.Num("go_to_stuck_s", &x.go_to_stuck_s, 1, 3600);
   ReadBool(j, "survey_centre", &x.survey_centre, &s);
   s.Num("survey_centre", nullptr, 0, 0);
   s.Finish();
@@ -342,6 +344,8 @@ void ReadSlam(const json& j, control::CoreOptions* o, std::string* e) {
     a.Num("angle_tolerance_rad", &d.angle_tolerance_rad, 0, 0.78);
     a.Num("constraint_sigma_rad", &d.constraint_sigma_rad, 1e-9, 1);
     a.Num("collinear_sigma_m", &d.collinear_sigma_m, 1e-9, 1);
+    a.Num("collinear_max_m", &d.collinear_max_m, 0, 1);
+    a.Num("collinear_min_length_m", &d.collinear_min_length_m, 0, 100);
     a.Num("measurement_cov_scale", &d.measurement_cov_scale, 1e-6, 1e6);
     a.Num("max_mahalanobis2", &d.max_mahalanobis2, 0.1, 1e9);
     ReadBool(aj ? *aj : kEmpty, "use_constraints", &d.use_constraints, &a);
@@ -438,6 +442,8 @@ std::string DumpConfig(const control::CoreOptions& o) {
                        {"k_heading", ex.k_heading}, {"replan_period_s", ex.replan_period_s},
                        {"front_stop_m", ex.front_stop_m}, {"go_to_timeout_s", ex.go_to_timeout_s},
                        {"contour_timeout_s", ex.contour_timeout_s},
+                       {"contour_leave_m", ex.contour_leave_m},
+                       {"go_to_stuck_s", ex.go_to_stuck_s},
                        {"survey_centre", ex.survey_centre}}},
       {"model", {{"axis_tolerance_rad", mo.axis_tolerance_rad}, {"collinear_m", mo.collinear_m},
                  {"corner_m", mo.corner_m}, {"wall_contact_m", mo.wall_contact_m}}},
@@ -496,6 +502,8 @@ std::string DumpConfig(const control::CoreOptions& o) {
                                  {"angle_tolerance_rad", a.angle_tolerance_rad},
                                  {"constraint_sigma_rad", a.constraint_sigma_rad},
                                  {"collinear_sigma_m", a.collinear_sigma_m},
+                                 {"collinear_max_m", a.collinear_max_m},
+                                 {"collinear_min_length_m", a.collinear_min_length_m},
                                  {"measurement_cov_scale", a.measurement_cov_scale},
                                  {"max_mahalanobis2", a.max_mahalanobis2},
                                  {"use_constraints", a.use_constraints},

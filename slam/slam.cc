@@ -291,7 +291,7 @@ void Slam::Associate(const ExtractedLine& obs) {
   }
   // Eq. (13): the weighted Hough distance to every mapped line; keep the nearest.
   int best = -1;
-  double best_dh = ao.max_dh;
+  double best_dh = ao.max_dh, best_dr = 0;
   for (int i = 0; i < ekf_.num_lines(); ++i) {
     double dr = rho_m - ekf_.rho(i);
     double dt = NormalizeAngle(theta_m - ekf_.theta(i));
@@ -302,6 +302,7 @@ void Slam::Associate(const ExtractedLine& obs) {
     const double dh = ao.weight_rho * dr * dr + ao.weight_theta * dt * dt;
     if (dh < best_dh) {
       best_dh = dh;
+      best_dr = dr;
       best = i;
     }
   }
@@ -311,7 +312,18 @@ void Slam::Associate(const ExtractedLine& obs) {
   }
   if (Overlap(best, a, b) <= 0) {
     // Eqs. (14)-(15): collinear with a mapped line but not overlapping it: another
-    // piece of the same wall (furniture in between), tied to it by eq. (12).
+    // piece of the same wall (furniture in between), tied to it by eq. (12). The
+    // tie is exact, and within epsilon_DH lie also the faces of two pieces of
+    // furniture a few cm out of line: tying those would pull both (and the
+    // robot) onto one line. So the tie is made only to a long line (a wall, not
+    // a face of furniture) and when the offsets agree closely.
+    const LineFeature& partner = lines_[static_cast<size_t>(best)];
+    if (std::abs(best_dr) > ao.collinear_max_m ||
+        (partner.p1 - partner.p0).norm() < ao.collinear_min_length_m) {
+      ++stats_.collinear_declined;
+      InsertLine(obs, -1);
+      return;
+    }
     ++stats_.collinear_insertions;
     InsertLine(obs, best);
     return;

@@ -53,6 +53,8 @@ struct AssociationOptions {
   double angle_tolerance_rad = 0.14;  // epsilon_theta: parallel/orthogonal to line 1
   double constraint_sigma_rad = 1e-3; // pseudo-measurement noise, eqs. (11)-(12)
   double collinear_sigma_m = 1e-3;
+  double collinear_max_m = 0.04;        // a collinear piece is tied (eq. 12) only within this offset
+  double collinear_min_length_m = 1.0;  // ... and only to a mapped line at least this long
   double measurement_cov_scale = 1.0; // multiplies the eq. (7) covariance
   double max_mahalanobis2 = 13.8;     // innovation gate of a match (chi2, 2 dof, 99.9 %)
   bool use_constraints = true;        // off: plain EKF (for comparison, Fig. 17)
@@ -96,6 +98,7 @@ struct SlamStats {
   int updates = 0;
   int insertions = 0;
   int collinear_insertions = 0;
+  int collinear_declined = 0;   // collinear by eq. (13) but not tied (offset, or short partner)
   int rejected_angle = 0;   // neither parallel nor orthogonal to line 1
   int rejected_gate = 0;    // matched by DH but inconsistent with the covariance
   int merges = 0;

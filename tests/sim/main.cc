@@ -88,7 +88,7 @@ nlohmann::json FaultsJson(const FaultCounters& f) {
 }
 
 int Run(const Common& c, double max_time, const std::string& map_out, const std::string& svg_out,
-        const std::string& lines_out) {
+        const std::string& lines_out, const std::string& events_out) {
   World world;
   control::CoreOptions core_opts;
   uint64_t seed;
@@ -103,8 +103,36 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
       return 1;
     }
   }
+  // Optionally record every change of mission state, reason or behaviour, with
+  // the true and the estimated pose (world frame / map frame).
+  std::ofstream events_file;
+  if (!events_out.empty()) {
+    events_file.open(events_out);
+    if (!events_file) {
+      std::fprintf(stderr, "irslam-sim: cannot write %s\n", events_out.c_str());
+      return 1;
+    }
+  }
+  std::string last_event;
   int windows_seen = 0;
   auto record = [&](const InProcessRun& r) {
+    if (events_file.is_open()) {
+      const auto st = r.core->Status(r.t);
+      const std::string key = st["state"].dump() + st["reason"].dump() + st["behaviour"].dump();
+      if (key != last_event) {
+        last_event = key;
+        const Pose2& p = r.sim->true_pose();
+        events_file << nlohmann::json{{"t", r.t},
+                                      {"state", st["state"]},
+                                      {"reason", st["reason"]},
+                                      {"behaviour", st["behaviour"]},
+                                      {"target_object", st["target_object"]},
+                                      {"true_pose", {p.x, p.y, p.theta}},
+                                      {"pose", st["pose"]}}
+                                .dump()
+                         << "\n";
+      }
+    }
     const auto& s = r.core->slam();
     if (!lines_file.is_open() || s.stats().windows == windows_seen) return;
     windows_seen = s.stats().windows;
@@ -251,10 +279,13 @@ int main(int argc, char** argv) {
   std::string map_out;
   run->add_option("--max-time", max_time, "Robot-time limit in seconds")->check(CLI::PositiveNumber);
   run->add_option("--map-out", map_out, "Write the map here (contracts §4)");
-  std::string svg_out, lines_out;
+  std::string svg_out, lines_out, events_out;
   run->add_option("--svg", svg_out, "Draw the map, the true room and trajectories as SVG");
   run->add_option("--lines-out", lines_out,
                   "Record every extracted line observation (JSON lines; input of irslam-weights)");
+  run->add_option("--events-out", events_out,
+                  "Record every change of mission state, reason or behaviour with the true and "
+                  "estimated pose (JSON lines)");
 
   auto* serve = app.add_subcommand("serve", "Be the motor controller on a CAN bus");
   add_common(serve);
@@ -268,6 +299,6 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-  if (*run) return irslam::sim::Run(common, max_time, map_out, svg_out, lines_out);
+  if (*run) return irslam::sim::Run(common, max_time, map_out, svg_out, lines_out, events_out);
   return irslam::sim::Serve(common, iface, time_scale);
 }

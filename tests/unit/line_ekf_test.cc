@@ -169,7 +169,7 @@ TEST(SlamMapTest, SeeingALineAgainUpdatesAndExtendsIt) {
 
 TEST(SlamMapTest, CollinearPieceIsInsertedThenMergedWhenItOverlaps) {
   Slam slam(TestOptions());
-  slam.ProcessLines({Obs(0.4, -M_PI / 2, -0.5, 0.0)});  // id 1
+  slam.ProcessLines({Obs(0.4, -M_PI / 2, -1.0, 0.0)});  // id 1, a wall (1 m)
   slam.ProcessLines({Obs(1.2, 0.0, -0.5, 0.3)});        // id 2, orthogonal
   slam.ProcessLines({Obs(0.42, -M_PI / 2, 0.5, 1.0)});  // collinear with 1, gap of 0.5 m: id 3
   ASSERT_EQ(slam.num_lines(), 3u);
@@ -185,8 +185,30 @@ TEST(SlamMapTest, CollinearPieceIsInsertedThenMergedWhenItOverlaps) {
   EXPECT_EQ(slam.lines()[0].id, 1);           // the older id survives
   EXPECT_EQ(slam.lines()[1].id, 2);
   EXPECT_EQ(slam.ekf().x().size(), 3 + 2 * 2);
-  EXPECT_NEAR(slam.lines()[0].length(), 1.5, 0.03);
+  EXPECT_NEAR(slam.lines()[0].length(), 2.0, 0.03);
   EXPECT_TRUE(SymmetricPositiveDefinite(slam.ekf().P()));
+}
+
+TEST(SlamMapTest, FacesOutOfLineOrBesideAShortFaceAreNotTied) {
+  // Within epsilon_DH (~11 cm) of a mapped line, but not pieces of one wall: a
+  // face 7 cm out of line with a wall, and a face in line with a short face of
+  // furniture. Each is mapped as a line of its own, where it was seen.
+  Slam slam(TestOptions());
+  slam.ProcessLines({Obs(0.4, -M_PI / 2, -1.0, 0.0)});  // id 1, a wall (1 m)
+  slam.ProcessLines({Obs(1.2, 0.0, -0.5, 0.3)});        // id 2, orthogonal
+  slam.ProcessLines({Obs(0.47, -M_PI / 2, 0.5, 1.0)});  // 7 cm out of line with 1: id 3
+  slam.ProcessLines({Obs(0.9, -M_PI / 2, -3.0, -2.7)}); // a 0.3 m face: id 4
+  slam.ProcessLines({Obs(0.91, -M_PI / 2, -2.2, -1.9)}); // 1 cm out of line with 4: id 5
+  ASSERT_EQ(slam.num_lines(), 5u);
+  EXPECT_EQ(slam.stats().collinear_insertions, 0);
+  EXPECT_EQ(slam.stats().collinear_declined, 2);
+  for (const auto& l : slam.lines()) EXPECT_EQ(l.collinear_with, 0) << "line " << l.id;
+  EXPECT_NEAR(slam.ekf().rho(2), 0.47, 2e-3);
+  EXPECT_NEAR(slam.ekf().rho(4), 0.91, 2e-3);
+  // A piece in line with the wall (1 cm) is still tied to it.
+  slam.ProcessLines({Obs(0.41, -M_PI / 2, 1.6, 2.0)});
+  EXPECT_EQ(slam.stats().collinear_insertions, 1);
+  EXPECT_EQ(slam.lines().back().collinear_with, 1);
 }
 
 TEST(SlamMapTest, MapFrameHasTheFirstWallAlongX) {
