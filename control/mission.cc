@@ -33,7 +33,11 @@ void Mission::Enter(MissionState s, double t, std::string reason) {
   state_ = s;
   state_since_ = t;
   reason_ = std::move(reason);
-  if (s == MissionState::kGoToP1) go_to_bumps_ = 0;
+  if (s == MissionState::kGoToP1) {
+    // A contact the last behaviour ended in is this go-to's first.
+    go_to_bumps_ = 0;
+    same_contact_escapes_ = 0;
+  }
   if (s == MissionState::kWallFollow) {
     follower_.Reset();
     follower_.SetOrbitCorners(false);
@@ -232,13 +236,26 @@ Eigen::Vector2d Rotate(const Eigen::Vector2d& v, double a) {
 
 }  // namespace
 
-void Mission::BeginEscape(double t, const Pose2& me) {
-  // Away from the contact: its bearing from the bumper bits (left, right, both:
-  // ahead), then turn to face away from it and drive off. (A round robot can
-  // always turn on the spot; backing up would run into what is behind.)
+void Mission::BeginEscape(double t, const slam::Slam& slam) {
+  // Away from the contact, then turn to face away from it and drive off. (A
+  // round robot can always turn on the spot; backing up would run into what is
+  // behind.) The contact is the nearest mapped side if one is that close, else
+  // its bearing from the bumper bits (left, right, both: ahead).
+  const Pose2 me = slam.pose();
+  const Eigen::Vector2d pos(me.x, me.y);
   const bool left = bumpers_now_ & 1, right = bumpers_now_ & 2;
   const double contact = left && !right ? 0.6 : right && !left ? -0.6 : 0.0;
   escape_heading_ = NormalizeAngle(me.theta + contact + M_PI);
+  double nearest = geometry_.radius_m + 0.08;
+  for (const auto& l : slam.lines()) {
+    const Eigen::Vector2d d = l.p1 - l.p0;
+    const double u = d.squaredNorm() > 0 ? std::clamp((pos - l.p0).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+    const Eigen::Vector2d away = pos - (l.p0 + u * d);
+    if (away.norm() < nearest && away.norm() > 1e-6) {
+      nearest = away.norm();
+      escape_heading_ = std::atan2(away.y(), away.x());
+    }
+  }
   escape_turned_ = false;
   backoff_until_ = t + 6.0;  // at most; ends after the drive off
   last_plan_ = -1e9;         // replan around what was hit once clear
@@ -418,7 +435,13 @@ WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, cons
     }
   }
   if (bumped && t >= backoff_until_) {
-    if (go_to_bumps_ >= 1) {
+    // The same contact again (not got clear of it yet) is not a second one.
+    const Pose2 p = slam.pose();
+    const bool same = go_to_bumps_ >= 1 && std::hypot(p.x - last_contact_.x(), p.y - last_contact_.y()) < 0.15 &&
+                      ++same_contact_escapes_ < 5;
+    if (!same) same_contact_escapes_ = 0;
+    last_contact_ = {p.x, p.y};
+    if (go_to_bumps_ >= 1 && !same) {
       // A second contact on the way: the way there is blocked by things the
       // beams miss (chair legs). Do not push on through them: give the goal up
       // (the next behaviour gets clear of the contact first).
@@ -431,8 +454,8 @@ WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, cons
       Enter(MissionState::kModel, t, "object " + std::to_string(target_) + ": way to P1 blocked");
       return Halt();
     }
-    ++go_to_bumps_;
-    BeginEscape(t, slam.pose());
+    if (!same) ++go_to_bumps_;
+    BeginEscape(t, slam);
   }
   if (t < backoff_until_) return Escape(t, dt, slam.pose());
   const Pose2 me = slam.pose();

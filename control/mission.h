@@ -95,7 +95,7 @@ class Mission {
   WheelCommand StepContour(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);
   bool Replan(const slam::Slam& slam, const RangeScan& scan);
   // Getting clear of a contact during a go-to: turn away from it, drive off.
-  void BeginEscape(double t, const Pose2& me);
+  void BeginEscape(double t, const slam::Slam& slam);
   WheelCommand Escape(double t, double dt, const Pose2& me);
   WheelCommand Halt() {
     last_cmd_ = {};
@@ -124,6 +124,8 @@ class Mission {
   uint8_t bumpers_now_ = 0;
   int windows_seen_ = 0;
   int go_to_bumps_ = 0;  // contacts since the go-to began
+  int same_contact_escapes_ = 0;
+  Eigen::Vector2d last_contact_ = Eigen::Vector2d::Zero();
   double go_progress_t_ = -1;  // the go-to last got 0.3 m further at this time ...
   Eigen::Vector2d go_progress_at_ = Eigen::Vector2d::Zero();  // ... from here
   std::vector<Eigen::Vector2d> contour_loop_;  // map frame: where contour following went

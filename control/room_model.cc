@@ -273,12 +273,17 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
         obj.open_ends += closed ? 0 : 1;
       }
     }
-    const bool box_at_wall = m.room.box && (std::abs(b.xmin - m.room.box->xmin) < o.wall_contact_m ||
-                                            std::abs(b.xmax - m.room.box->xmax) < o.wall_contact_m ||
-                                            std::abs(b.ymin - m.room.box->ymin) < o.wall_contact_m ||
-                                            std::abs(b.ymax - m.room.box->ymax) < o.wall_contact_m);
-    obj.kind = (touches_wall || box_at_wall) ? ObjectKind::kWallContact : ObjectKind::kFree;
-    const size_t needed = obj.kind == ObjectKind::kWallContact ? 3 : 4;
+    // The walls the box lies against: their sides are never seen (one wall: 3
+    // sides to map; in a corner of the room, two walls: 2).
+    const size_t walls_touched =
+        m.room.box ? static_cast<size_t>(std::abs(b.xmin - m.room.box->xmin) < o.wall_contact_m) +
+                         static_cast<size_t>(std::abs(b.xmax - m.room.box->xmax) < o.wall_contact_m) +
+                         static_cast<size_t>(std::abs(b.ymin - m.room.box->ymin) < o.wall_contact_m) +
+                         static_cast<size_t>(std::abs(b.ymax - m.room.box->ymax) < o.wall_contact_m)
+                   : 0;
+    obj.kind = (touches_wall || walls_touched > 0) ? ObjectKind::kWallContact : ObjectKind::kFree;
+    const size_t needed = obj.kind == ObjectKind::kWallContact ? std::max<size_t>(2, 4 - std::min<size_t>(walls_touched, 2))
+                                                               : 4;
     obj.complete = obj.open_ends == 0 && obj.lines.size() >= needed;
     obj.box = FaceBox(sides, g, b);
     std::sort(obj.lines.begin(), obj.lines.end());
