@@ -99,6 +99,106 @@ TEST(RoomModelTest, ObjectIdsAreStableAndGivingUpIsRemembered) {
   EXPECT_EQ(model.pending(), 0);
 }
 
+TEST(RoomModelTest, BoxEdgesComeFromTheFacesNotTheEnds) {
+  auto lines = Room();
+  // A free box 1.5..2.1 x 1.5..2.1 whose horizontal sides were seen 6 cm past the
+  // vertical faces (noise at the ends) and the vertical ones 5 cm short.
+  lines.push_back(Line(10, 1.44, 1.5, 2.16, 1.5));
+  lines.push_back(Line(11, 2.1, 1.55, 2.1, 2.05));
+  lines.push_back(Line(12, 2.16, 2.1, 1.44, 2.1));
+  lines.push_back(Line(13, 1.5, 2.05, 1.5, 1.55));
+  auto traj = Loop();
+  for (double a = 0; a < 2 * M_PI; a += 0.1) traj.push_back({0, {1.8 + 0.7 * std::cos(a), 1.8 + 0.7 * std::sin(a), 0}});
+  Modeler m{ModelOptions{}};
+  const auto& model = m.Update(lines, traj);
+  ASSERT_EQ(model.objects.size(), 1u);
+  const Box& b = model.objects[0].box;
+  EXPECT_NEAR(b.xmin, 1.5, 1e-9);
+  EXPECT_NEAR(b.xmax, 2.1, 1e-9);
+  EXPECT_NEAR(b.ymin, 1.5, 1e-9);
+  EXPECT_NEAR(b.ymax, 2.1, 1e-9);
+  EXPECT_TRUE(model.objects[0].complete);
+}
+
+TEST(RoomModelTest, ABoxInACornerOfTheRoomIsCompleteWithItsTwoFreeSides) {
+  // Room walls in pieces around a box in the top-left corner (x 0..0.7, y 3.2..4).
+  std::vector<slam::LineFeature> lines = {Line(1, 0, 0, 4, 0), Line(2, 4, 0, 4, 4), Line(3, 4, 4, 0.7, 4),
+                                          Line(4, 0, 3.2, 0, 0)};
+  lines.push_back(Line(6, 0.7, 3.98, 0.7, 3.2));   // its right side
+  lines.push_back(Line(7, 0.68, 3.2, 0.02, 3.2));  // its bottom side
+  Modeler m{ModelOptions{}};
+  const auto& model = m.Update(lines, Loop());
+  ASSERT_EQ(model.objects.size(), 1u);
+  EXPECT_EQ(model.objects[0].kind, ObjectKind::kWallContact);
+  EXPECT_EQ(model.objects[0].open_ends, 0);
+  EXPECT_TRUE(model.objects[0].complete);
+}
+
+TEST(RoomModelTest, SidesInsideAFollowedContourAreOneObject) {
+  // Compound furniture: a box 1.3..2.1 x 2.2..2.8 and a taller one 2.1..2.5 x
+  // 2.2..3.0. Mapped: the bottom (both), the right side and the top of the
+  // first box; the 0.2 m step and the second box's top were never long enough
+  // to map, nor the left side.
+  auto lines = Room();
+  lines.push_back(Line(12, 2.5, 2.99, 2.5, 2.19));
+  lines.push_back(Line(13, 2.47, 2.2, 1.24, 2.2));
+  lines.push_back(Line(14, 2.06, 2.8, 1.28, 2.8));
+  auto traj = Loop();
+  std::vector<Eigen::Vector2d> loop;
+  for (double a = 0; a < 2 * M_PI; a += 0.1) {
+    const Eigen::Vector2d p(1.9 + 1.0 * std::cos(a), 2.6 + 0.8 * std::sin(a));
+    loop.push_back(p);
+    traj.push_back({0, {p.x(), p.y(), 0}});
+  }
+  Modeler m{ModelOptions{}};
+  // Without the loop: two objects (the top of the first box meets nothing).
+  EXPECT_EQ(m.Update(lines, traj).objects.size(), 2u);
+  const int id = m.model().objects[0].id;
+  EXPECT_TRUE(m.CloseByContour(id, loop, lines, traj));
+  ASSERT_EQ(m.model().objects.size(), 1u);
+  const ObjectModel& o = m.model().objects[0];
+  EXPECT_EQ(o.lines, std::vector<int>({12, 13, 14}));
+  EXPECT_TRUE(o.complete);
+  EXPECT_NEAR(o.box.xmax, 2.5, 1e-9);
+  EXPECT_NEAR(o.box.ymin, 2.2, 1e-9);
+}
+
+TEST(PathPlannerTest, LeavesATightSpotEvenFromWithinTheHardClearance) {
+  PlannerOptions o;
+  // The robot stands 0.12 m from a mapped side's (extended) end: within hard_m.
+  const std::vector<Obstacle> obs = {{{0, 0}, {1, 0}}};
+  const auto path = PlanPath(obs, {1.05, 0.11}, {2.0, 1.0}, o);
+  ASSERT_TRUE(path);
+  // Its first step leads away from the side.
+  const Eigen::Vector2d first = (*path)[1];
+  EXPECT_GT(first.y(), 0.11);
+  // It never goes nearer to the side than it stands, and is clear of the hard
+  // clearance after leaving.
+  for (size_t i = 0; i + 1 < path->size(); ++i) {
+    for (double u = 0; u <= 1; u += 0.02) {
+      const Eigen::Vector2d p = (*path)[i] + u * ((*path)[i + 1] - (*path)[i]);
+      const double d = p.x() > 1 ? (p - Eigen::Vector2d(1, 0)).norm() : std::abs(p.y());
+      EXPECT_GE(d, 0.11 - 1e-9) << p.transpose();
+      if ((p - Eigen::Vector2d(1.05, 0.11)).norm() > 0.3) {
+        EXPECT_GE(d, o.hard_m - 0.03) << p.transpose();
+      }
+    }
+  }
+}
+
+TEST(PathPlannerTest, TellsWhetherAPathIsStillClear) {
+  const std::vector<Obstacle> obs = {{{1, -1}, {1, 1}}};
+  const std::vector<Eigen::Vector2d> around = {{0, 0}, {0, 1.5}, {2, 1.5}, {2, 0}};
+  const std::vector<Eigen::Vector2d> through = {{0, 0}, {2, 0}};
+  EXPECT_NEAR(PathLength(around), 1.5 + 2 + 1.5, 1e-12);
+  EXPECT_TRUE(PathClear(obs, around, 0.3, 0.0));
+  EXPECT_FALSE(PathClear(obs, through, 0.3, 0.0));
+  EXPECT_FALSE(PathClear(obs, around, 0.6, 0.0));  // passes the segment's end at 0.5
+  // Near the start the robot may stand closer.
+  EXPECT_TRUE(PathClear({{{0, -0.1}, {0, -1}}}, around, 0.3, 0.3));
+  EXPECT_FALSE(PathClear({{{0, -0.1}, {0, -1}}}, around, 0.3, 0.0));
+}
+
 TEST(PathPlannerTest, GoesAroundAnObstacleKeepingTheClearance) {
   PlannerOptions o;
   std::vector<Obstacle> obs = {{{1, -1}, {1, 1}}};  // a wall segment between start and goal

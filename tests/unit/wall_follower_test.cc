@@ -53,6 +53,45 @@ TEST(WallFollowerTest, SteersBackTowardsTheFollowDistance) {
   EXPECT_GT(too_close.v, 0);
 }
 
+TEST(WallFollowerTest, GoesRoundACornerSeenByTheSideSensorAloneWhenContourFollowing) {
+  const auto o = DefaultCoreOptions();
+  // Only the side sensor sees something: the corner of a small box being passed.
+  const auto corner = [](double range) {
+    RangeScan s;
+    s.range_m[0] = range;
+    return s;
+  };
+  const double r_far = 0.50, d_far = r_far + 0.05;  // (the sensor sits 5 cm right of the centre)
+  for (bool orbit : {false, true}) {
+    WallFollower f(o.wall, o.slam.mounts, 0.17);
+    f.SetOrbitCorners(orbit);
+    f.StartFollowing(0.0);
+    const auto w = f.RightWall(corner(r_far));
+    ASSERT_TRUE(w);
+    EXPECT_EQ(w->corner, true);
+    const Twist t = f.Step(0.02, corner(r_far), false);
+    if (orbit) {
+      // The curvature of the circle at the follow distance, plus the correction.
+      EXPECT_NEAR(t.v, o.wall.outer_arc_speed_mps, 1e-9);
+      EXPECT_NEAR(t.omega,
+                  -o.wall.outer_arc_speed_mps / o.wall.follow_distance_m -
+                      o.wall.k_distance * (d_far - o.wall.follow_distance_m),
+                  1e-9);
+    } else {
+      // Following the room: taken as a wall alongside (P on the distance only).
+      EXPECT_NEAR(t.omega, -o.wall.k_distance * (d_far - o.wall.follow_distance_m), 1e-9);
+    }
+  }
+  // Closer than the follow distance: never turned towards it (the side sensor may
+  // still see the side's end, short of the corner).
+  WallFollower f(o.wall, o.slam.mounts, 0.17);
+  f.SetOrbitCorners(true);
+  f.StartFollowing(0.0);
+  EXPECT_GT(f.Step(0.02, corner(0.30), false).omega, 0);
+  // With the diagonal sensor seeing the side too, it is a wall alongside.
+  EXPECT_FALSE(f.RightWall(WallOnRight(0.40, 0.0))->corner);
+}
+
 TEST(WallFollowerTest, TurnsLeftAtAnInnerCorner) {
   const auto o = DefaultCoreOptions();
   WallFollower f(o.wall, o.slam.mounts, 0.17);
