@@ -503,6 +503,7 @@ WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, cons
       follower_.StartFollowing(t);
       follower_.SetOrbitCorners(true);
       contour_turned_ = 0;
+      contour_loops_done_ = 0;
       contour_loop_.clear();
       last_theta_ = me.theta;
       windows_seen_ = slam.stats().windows;
@@ -556,6 +557,13 @@ WheelCommand Mission::StepContour(double t, double dt, const slam::Slam& slam, c
     if (modeler_.CloseByContour(target_, contour_loop_, slam.map_lines(), slam.map_trajectory())) {
       Enter(MissionState::kModel, t, "object " + std::to_string(target_) + " complete (contour closed)");
       return Halt();
+    }
+    if (++contour_loops_done_ < explore_.contour_loops) {
+      // Round again: the sides of a small box are short, and a window of the
+      // PDS may have cut one in pieces too short to map; the next time round
+      // the windows fall elsewhere.
+      contour_turned_ = 0;
+      return ToWheels(tw, dt);
     }
     modeler_.GiveUp(target_, "contour followed all round, still incomplete");
     Enter(MissionState::kModel, t, "object " + std::to_string(target_) + " incomplete after a full contour");

@@ -51,6 +51,7 @@ struct ExploreOptions {
   double go_to_timeout_s = 90;        // give the object up if P1 is not reached by then
   double go_to_stuck_s = 25;          // ... or if the robot got no 0.3 m further for this long
   double contour_timeout_s = 150;     // give up completing an object after this
+  int contour_loops = 2;              // times round an object before giving it up
   double contour_leave_m = 0.6;       // a wall-contact object's free sides have been followed
                                       // once the robot is this much farther than the follow
                                       // distance from it (it follows the wall away)
@@ -124,6 +125,7 @@ class Mission {
   uint8_t bumpers_now_ = 0;
   int windows_seen_ = 0;
   int go_to_bumps_ = 0;  // contacts since the go-to began
+  int contour_loops_done_ = 0;
   int same_contact_escapes_ = 0;
   Eigen::Vector2d last_contact_ = Eigen::Vector2d::Zero();
   double go_progress_t_ = -1;  // the go-to last got 0.3 m further at this time ...

@@ -278,6 +278,7 @@ void ReadExploration(const json& j, control::CoreOptions* o, std::string* e) {
   s.Num("go_to_timeout_s", &x.go_to_timeout_s, 1, 3600);
   s.Num("contour_timeout_s", &x.contour_timeout_s, 1, 3600);
   s.Num("contour_leave_m", &x.contour_leave_m, 0.05, 10);
+  s.Int("contour_loops", &x.contour_loops, 1, 10);
   s.Num("go_to_stuck_s", &x.go_to_stuck_s, 1, 3600);
   ReadBool(j, "survey_centre", &x.survey_centre, &s);
   s.Num("survey_centre", nullptr, 0, 0);
@@ -443,6 +444,7 @@ std::string DumpConfig(const control::CoreOptions& o) {
                        {"front_stop_m", ex.front_stop_m}, {"go_to_timeout_s", ex.go_to_timeout_s},
                        {"contour_timeout_s", ex.contour_timeout_s},
                        {"contour_leave_m", ex.contour_leave_m},
+                       {"contour_loops", ex.contour_loops},
                        {"go_to_stuck_s", ex.go_to_stuck_s},
                        {"survey_centre", ex.survey_centre}}},
       {"model", {{"axis_tolerance_rad", mo.axis_tolerance_rad}, {"collinear_m", mo.collinear_m},
