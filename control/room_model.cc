@@ -261,6 +261,11 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
             // The corner's position along t is s's offset.
             const bool within_t = s.c > t.a0 - o.corner_m && s.c < t.a1 + o.corner_m;
             if ((corner - e).norm() < o.corner_m && within_t) closed = true;
+            // One of the two sides ends right at the corner and the other was
+            // seen short of it (its end passed on a corner arc): as in `meets`.
+            const double t_end = std::min((t.End(0) - corner).norm(), (t.End(1) - corner).norm());
+            const double e_end = (corner - e).norm();
+            if ((t_end < 0.1 && e_end < 1.5 * o.corner_m) || (e_end < 0.1 && t_end < 1.5 * o.corner_m)) closed = true;
           } else if (std::abs(t.c - s.c) < o.collinear_m &&
                      std::min((t.End(0) - e).norm(), (t.End(1) - e).norm()) < o.corner_m) {
             closed = true;
@@ -269,6 +274,19 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
         if (!closed && near_wall(e)) {
           closed = true;
           touches_wall = true;
+        }
+        if (!closed && m.room.box) {
+          // A side running into a wall: the inner corner it makes with the wall
+          // is seen from the follow distance at best, so its end is seen short
+          // of the wall - by up to wall_reach_m.
+          const Box& r = *m.room.box;
+          const double along = s.horizontal ? e.x() : e.y();
+          const double lo = s.horizontal ? r.xmin : r.ymin, hi = s.horizontal ? r.xmax : r.ymax;
+          const bool toward_lo = k == 0, toward_hi = k == 1;  // a0 <= a1: end 0 is the lower one
+          if ((toward_lo && along - lo < o.wall_reach_m) || (toward_hi && hi - along < o.wall_reach_m)) {
+            closed = true;
+            touches_wall = true;
+          }
         }
         obj.open_ends += closed ? 0 : 1;
       }

@@ -23,6 +23,7 @@ struct ModelOptions {
   double corner_m = 0.35;            // two sides meet: their corner within this of an end
                                      // (gaps narrower than the robot are not passable anyway)
   double wall_contact_m = 0.15;      // an object this close to a wall touches it
+  double wall_reach_m = 0.35;        // a side ending this close to a wall (along it) runs into it
 };
 
 struct Box {

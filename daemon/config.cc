@@ -292,6 +292,7 @@ void ReadModel(const json& j, control::CoreOptions* o, std::string* e) {
   s.Num("collinear_m", &m.collinear_m, 0.001, 1);
   s.Num("corner_m", &m.corner_m, 0.01, 2);
   s.Num("wall_contact_m", &m.wall_contact_m, 0.01, 2);
+  s.Num("wall_reach_m", &m.wall_reach_m, 0, 2);
   s.Finish();
 }
 
@@ -448,7 +449,7 @@ std::string DumpConfig(const control::CoreOptions& o) {
                        {"go_to_stuck_s", ex.go_to_stuck_s},
                        {"survey_centre", ex.survey_centre}}},
       {"model", {{"axis_tolerance_rad", mo.axis_tolerance_rad}, {"collinear_m", mo.collinear_m},
-                 {"corner_m", mo.corner_m}, {"wall_contact_m", mo.wall_contact_m}}},
+                 {"corner_m", mo.corner_m}, {"wall_contact_m", mo.wall_contact_m}, {"wall_reach_m", mo.wall_reach_m}}},
       {"robot", {{"wheel_base_m", g.wheel_base_m}, {"wheel_radius_m", g.wheel_radius_m},
                  {"counts_per_rev", g.counts_per_rev}, {"radius_m", g.radius_m},
                  {"max_wheel_speed_mps", g.max_wheel_speed_mps}}},
