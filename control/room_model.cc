@@ -37,7 +37,7 @@ double Overlap1d(double a0, double a1, double b0, double b1) {
 // point only where no side faces that way (an open, unseen face), or where the
 // ends reach well beyond every face (compound furniture, seen in part).
 Box FaceBox(const std::vector<Side>& sides, const std::vector<size_t>& group, const Box& ends) {
-  constexpr double kBeyond = 0.15;  // ends this far past a face: that face is not the edge
+  constexpr double kBeyond = 0.10;  // ends this far past a face: that face is not the edge
   Box b = ends;
   std::optional<double> xmin, xmax, ymin, ymax;
   for (size_t i : group) {
