@@ -57,7 +57,8 @@ bool Mission::Start(double t, std::string* why) {
   }
   started_at_ = t;
   last_t_ = t;
-  survey_done_ = false;
+  surveys_done_ = 0;
+  survey_points_.clear();
   loops_done_ = 0;
   loop_times_.clear();
   Enter(MissionState::kWallFollow, t, "");
@@ -278,27 +279,12 @@ WheelCommand Mission::StepModel(double t, const slam::Slam& slam) {
     Enter(MissionState::kDone, t, "room modelled (exploration off)");
     return Halt();
   }
-  if (m.pending() == 0 && explore_.survey_centre && !survey_done_ && m.room.box) {
-    // Free objects far from every wall were never within range: look from the
-    // middle of the room once (the free cell nearest its centre).
-    survey_done_ = true;
-    const Box& r = *m.room.box;
-    const Eigen::Vector2d c(0.5 * (r.xmin + r.xmax), 0.5 * (r.ymin + r.ymax));
-    const double rot = slam.map_rotation();
-    for (double radius = 0; radius < 1.2; radius += 0.2) {
-      for (int k = 0; k < (radius > 0 ? 8 : 1); ++k) {
-        const Eigen::Vector2d p = c + radius * Eigen::Vector2d(std::cos(k * M_PI / 4), std::sin(k * M_PI / 4));
-        p1_ = Rotate(p, -rot);
-        p1_heading_ = slam.pose().theta;
-        if (Replan(slam, RangeScan{})) {
-          target_ = 0;
-          survey_turned_ = -1;
-          Enter(MissionState::kGoToP1, t, "surveying the room from its centre");
-          last_plan_ = t;
-          return Halt();
-        }
-      }
-    }
+  if (m.pending() == 0 && explore_.survey_centre && surveys_done_ < explore_.max_surveys && m.room.box) {
+    // Furniture far from every wall is never within range of the wall-following
+    // loop: look round from the room's middle, then from the free points that
+    // see most of what no trajectory point came within survey_range_m of, until
+    // little is left unseen.
+    if (StartSurvey(t, slam, m)) return Halt();
   }
   if (m.pending() == 0) {
     int complete = 0;
@@ -364,6 +350,74 @@ WheelCommand Mission::StepModel(double t, const slam::Slam& slam) {
   modeler_.GiveUp(target_, "P1 unreachable");
   reason_ = "object " + std::to_string(target_) + ": P1 unreachable";
   return Halt();
+}
+
+bool Mission::StartSurvey(double t, const slam::Slam& slam, const EnvironmentModel& m) {
+  const Box& r = *m.room.box;
+  const double rot = slam.map_rotation();
+  const Eigen::Vector2d middle(0.5 * (r.xmin + r.xmax), 0.5 * (r.ymin + r.ymax));
+  const auto go = [&](const Eigen::Vector2d& p) {
+    p1_ = Rotate(p, -rot);
+    p1_heading_ = slam.pose().theta;
+    if (!Replan(slam, RangeScan{})) return false;
+    ++surveys_done_;
+    survey_points_.push_back(p);
+    target_ = 0;
+    survey_turned_ = -1;
+    Enter(MissionState::kGoToP1, t, "surveying the room (" + std::to_string(surveys_done_) + ")");
+    last_plan_ = t;
+    return true;
+  };
+  if (surveys_done_ == 0) {
+    // First from the middle of the room (the reachable point nearest it).
+    for (double radius = 0; radius < 1.2; radius += 0.2) {
+      for (int k = 0; k < (radius > 0 ? 8 : 1); ++k) {
+        if (go(middle + radius * Eigen::Vector2d(std::cos(k * M_PI / 4), std::sin(k * M_PI / 4)))) return true;
+      }
+    }
+  }
+  constexpr double kCell = 0.2;
+  const double range = explore_.survey_range_m;
+  // Cells of the room (map frame) not yet seen: farther than the range from
+  // every trajectory point, and not inside a known object.
+  const auto traj = slam.map_trajectory();
+  std::vector<Eigen::Vector2d> unseen, candidates;
+  for (double x = r.xmin + 0.5 * kCell; x < r.xmax; x += kCell) {
+    for (double y = r.ymin + 0.5 * kCell; y < r.ymax; y += kCell) {
+      const Eigen::Vector2d c(x, y);
+      bool in_object = false;
+      for (const auto& o : m.objects) {
+        in_object = in_object || (x > o.box.xmin - 0.35 && x < o.box.xmax + 0.35 && y > o.box.ymin - 0.35 &&
+                                  y < o.box.ymax + 0.35);
+      }
+      const bool clear_of_walls = x - r.xmin > 0.4 && r.xmax - x > 0.4 && y - r.ymin > 0.4 && r.ymax - y > 0.4;
+      if (!in_object && clear_of_walls) candidates.push_back(c);
+      bool seen = in_object;
+      for (size_t k = 0; k < traj.size() && !seen; k += 2) {
+        seen = std::hypot(traj[k].pose.x - x, traj[k].pose.y - y) < range;
+      }
+      if (!seen) unseen.push_back(c);
+    }
+  }
+  for (const auto& sp : survey_points_) {  // and what earlier surveys looked at
+    unseen.erase(std::remove_if(unseen.begin(), unseen.end(),
+                                [&](const Eigen::Vector2d& c) { return (c - sp).norm() < range; }),
+                 unseen.end());
+  }
+  // Then from the points that would see most of the unseen room (ties: nearer
+  // the middle).
+  std::vector<std::pair<double, Eigen::Vector2d>> ranked;
+  for (const auto& c : candidates) {
+    int n = 0;
+    for (const auto& u : unseen) n += (u - c).norm() < range;
+    if (n * kCell * kCell >= explore_.survey_min_unseen_m2) ranked.emplace_back(n - 0.01 * (c - middle).norm(), c);
+  }
+  std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  for (size_t i = 0; i < ranked.size() && i < 8; ++i) {
+    if (go(ranked[i].second)) return true;
+  }
+  surveys_done_ = explore_.max_surveys;  // nothing left worth a look, or nowhere to look from
+  return false;
 }
 
 bool Mission::Replan(const slam::Slam& slam, const RangeScan& scan) {

@@ -55,8 +55,11 @@ struct ExploreOptions {
   double contour_leave_m = 0.6;       // a wall-contact object's free sides have been followed
                                       // once the robot is this much farther than the follow
                                       // distance from it (it follows the wall away)
-  bool survey_centre = true;          // once: go to the room's centre and look round, to find
+  bool survey_centre = true;          // look round from inside the room (first its middle) to find
                                       // free objects too far from the walls to be seen
+  int max_surveys = 3;                // ... from at most this many points
+  double survey_range_m = 0.7;        // a part of the room within this of the trajectory was seen
+  double survey_min_unseen_m2 = 0.4;  // a survey point must see at least this much unseen room
 };
 
 class Mission {
@@ -95,6 +98,8 @@ class Mission {
   WheelCommand StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);
   WheelCommand StepContour(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);
   bool Replan(const slam::Slam& slam, const RangeScan& scan);
+  // Picks the next survey point and starts going there; false if none is left.
+  bool StartSurvey(double t, const slam::Slam& slam, const EnvironmentModel& m);
   // Getting clear of a contact during a go-to: turn away from it, drive off.
   void BeginEscape(double t, const slam::Slam& slam);
   WheelCommand Escape(double t, double dt, const Pose2& me);
@@ -111,7 +116,8 @@ class Mission {
   WallFollower follower_;
   Modeler modeler_;
   int target_ = 0;                     // object being completed (0: the survey)
-  bool survey_done_ = false;
+  int surveys_done_ = 0;
+  std::vector<Eigen::Vector2d> survey_points_;  // map frame
   double survey_turned_ = -1;          // >= 0 while turning round at the survey point
   Eigen::Vector2d p1_ = Eigen::Vector2d::Zero();  // internal frame
   double p1_heading_ = 0;

@@ -282,6 +282,9 @@ void ReadExploration(const json& j, control::CoreOptions* o, std::string* e) {
   s.Num("go_to_stuck_s", &x.go_to_stuck_s, 1, 3600);
   ReadBool(j, "survey_centre", &x.survey_centre, &s);
   s.Num("survey_centre", nullptr, 0, 0);
+  s.Int("max_surveys", &x.max_surveys, 0, 100);
+  s.Num("survey_range_m", &x.survey_range_m, 0.1, 5);
+  s.Num("survey_min_unseen_m2", &x.survey_min_unseen_m2, 0, 100);
   s.Finish();
 }
 
@@ -447,7 +450,10 @@ std::string DumpConfig(const control::CoreOptions& o) {
                        {"contour_leave_m", ex.contour_leave_m},
                        {"contour_loops", ex.contour_loops},
                        {"go_to_stuck_s", ex.go_to_stuck_s},
-                       {"survey_centre", ex.survey_centre}}},
+                       {"survey_centre", ex.survey_centre},
+                       {"max_surveys", ex.max_surveys},
+                       {"survey_range_m", ex.survey_range_m},
+                       {"survey_min_unseen_m2", ex.survey_min_unseen_m2}}},
       {"model", {{"axis_tolerance_rad", mo.axis_tolerance_rad}, {"collinear_m", mo.collinear_m},
                  {"corner_m", mo.corner_m}, {"wall_contact_m", mo.wall_contact_m}, {"wall_reach_m", mo.wall_reach_m}}},
       {"robot", {{"wheel_base_m", g.wheel_base_m}, {"wheel_radius_m", g.wheel_radius_m},
