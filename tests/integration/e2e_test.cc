@@ -423,10 +423,17 @@ TEST_F(E2eTest, WholeMissionOverTheBusEndsDoneWithTheRoomModelled) {
   EXPECT_EQ((*m)["state"], "done");
   ASSERT_TRUE((*m)["room"]["box"].is_array());
   for (const char* wall : {"bottom", "right", "top", "left"}) EXPECT_FALSE((*m)["room"]["walls"][wall].empty()) << wall;
-  int wall_contact = 0, free_objects = 0;
-  for (const auto& obj : (*m)["objects"]) (obj["kind"] == "free" ? free_objects : wall_contact)++;
+  int wall_contact = 0, free_objects = 0, complete = 0;
+  for (const auto& obj : (*m)["objects"]) {
+    (obj["kind"] == "free" ? free_objects : wall_contact)++;
+    complete += obj["complete"].get<bool>();
+  }
   EXPECT_EQ(wall_contact, 1);
   EXPECT_EQ(free_objects, 2);
+  // In process every seed but one in 20 completes all three (docs/accuracy.md);
+  // over a real bus the timing differs from run to run: at least two of three.
+  EXPECT_GE(complete, 2) << (*m)["objects"].dump();
+  std::printf("whole mission over the bus: %d of 3 objects complete\n", complete);
   // Nothing mapped or seen is touched; a box corner that sits between the beams
   // may be found by the bumper once on the way to P1 (timing differs from run to
   // run over a real bus: seen in about one run in six under a loaded host), and

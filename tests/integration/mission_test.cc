@@ -139,13 +139,12 @@ TEST(FaultRunTest, MissionEndsDoneThroughLossCorruptionReorderingAndGlitches) {
     sim::InProcessRun run =
         sim::RunInProcess(world, control::DefaultCoreOptions(), seed, kLimitS, nullptr, &*faults);
     EXPECT_EQ(run.core->state(), control::MissionState::kDone) << "seed " << seed;
-    // At most the one contact the go-to may have with a box corner between the
-    // beams (docs/reliability.md), found by the bumper and remembered.
-    EXPECT_LE(run.sim->collisions(), 1u) << "seed " << seed;
+    EXPECT_EQ(run.sim->collisions(), 0u) << "seed " << seed;
     const auto sc = metrics::ScoreObjects(run.core->Map(), run.core->slam(), world);
     EXPECT_EQ(sc.found, sc.pieces) << "seed " << seed;
     EXPECT_EQ(sc.kind_right, sc.pieces) << "seed " << seed;
-    EXPECT_LT(sc.max_edge_m, 0.25) << "seed " << seed;
+    EXPECT_EQ(sc.complete, sc.pieces) << "seed " << seed;
+    EXPECT_LE(sc.max_edge_m, 0.06) << "seed " << seed;
     const nlohmann::json status = run.core->Status(run.t);
     const auto& f = status["frames"];
     const auto& injected = run.faults->counters();
@@ -157,6 +156,33 @@ TEST(FaultRunTest, MissionEndsDoneThroughLossCorruptionReorderingAndGlitches) {
     EXPECT_GT(f["ir_stuck"].get<uint64_t>(), 300u) << f;
     EXPECT_GT(f["seq_gap_encoder"].get<uint64_t>(), 500u) << f;
   }
+}
+
+}  // namespace
+}  // namespace irslam
+
+namespace irslam {
+namespace {
+
+// Under 5 % frame loss (seed 4) the wall-following loop passes the top-right
+// box of Fig. 14 without mapping it, and the look from the room's middle is too
+// far from it: a later survey, from where most of the room was never within
+// range, finds it, and it is completed like the others.
+TEST(FaultRunTest, ABoxTheWallFollowingLoopMissedIsFoundByALaterSurvey) {
+  std::string error;
+  const auto faults = sim::ParseFaultSpec("loss:p=0.05", &error);
+  ASSERT_TRUE(faults) << error;
+  const sim::World world = testing::LoadTestWorld("fig14");
+  sim::InProcessRun run = sim::RunInProcess(world, control::DefaultCoreOptions(), 4, 900, nullptr, &*faults);
+  EXPECT_EQ(run.core->state(), control::MissionState::kDone);
+  const auto sc = metrics::ScoreObjects(run.core->Map(), run.core->slam(), world);
+  EXPECT_EQ(sc.found, sc.pieces);
+  EXPECT_EQ(sc.complete, sc.pieces);
+  // Only with the later surveys: without them the box is never seen.
+  control::CoreOptions one = control::DefaultCoreOptions();
+  one.explore.max_surveys = 1;
+  sim::InProcessRun once = sim::RunInProcess(world, one, 4, 900, nullptr, &*faults);
+  EXPECT_EQ(metrics::ScoreObjects(once.core->Map(), once.core->slam(), world).found, sc.pieces - 1);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include "daemon/access.h"
 #include "daemon/config.h"
+#include "proto/json_text.h"
 #include "tests/testing/process.h"
 
 namespace irslam {
@@ -23,6 +24,21 @@ TEST(ConfigTest, ShippedFileEqualsTheBuiltInDefaults) {
     o.slam.mounts[i] = d.slam.mounts[i];
   }
   EXPECT_EQ(DumpConfig(o), DumpConfig(d));
+}
+
+// Every parameter is documented in the shipped file: each key the daemon
+// prints (--print-config) is written there, with its default.
+TEST(ConfigTest, ShippedFileListsEveryParameter) {
+  std::string error;
+  const auto shipped = ParseJsonText(testing::ReadFile(IRSLAM_SOURCE_DIR "/daemon/irslamd.conf"), &error);
+  ASSERT_TRUE(shipped) << error;
+  const auto all = ParseJsonText(DumpConfig(control::DefaultCoreOptions()), &error);
+  ASSERT_TRUE(all) << error;
+  const nlohmann::json flat_shipped = shipped->flatten(), flat_all = all->flatten();
+  for (const auto& [key, value] : flat_all.items()) {
+    if (key.rfind("/sensors/mounts/", 0) == 0) continue;  // an array, written as rows
+    EXPECT_TRUE(flat_shipped.contains(key)) << key << " is not in daemon/irslamd.conf";
+  }
 }
 
 TEST(ConfigTest, OverridesOnlyWhatIsGiven) {
