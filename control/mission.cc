@@ -458,18 +458,20 @@ bool Mission::Replan(const slam::Slam& slam, const RangeScan& scan) {
   return true;
 }
 
-WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& raw_scan,
-                               bool bumped) {
-  if (t - state_since_ > explore_.go_to_timeout_s) {
-    if (target_ == 0) {
-      survey_turned_ = -1;
-      Enter(MissionState::kModel, t, "survey point not reached");
-      return Halt();
-    }
-    modeler_.GiveUp(target_, "P1 not reached in time");
-    Enter(MissionState::kModel, t, "object " + std::to_string(target_) + ": P1 not reached");
+WheelCommand Mission::AbandonGoTo(double t, const std::string& why) {
+  if (target_ == 0) {
+    survey_turned_ = -1;
+    Enter(MissionState::kModel, t, "survey point: " + why);
     return Halt();
   }
+  modeler_.GiveUp(target_, "P1: " + why);
+  Enter(MissionState::kModel, t, "object " + std::to_string(target_) + ", P1: " + why);
+  return Halt();
+}
+
+WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& raw_scan,
+                               bool bumped) {
+  if (t - state_since_ > explore_.go_to_timeout_s) return AbandonGoTo(t, "not reached in time");
   // Stuck (turning on the spot, no way found through what the beams see): after
   // go_to_stuck_s without getting 0.3 m further, give the goal up.
   {
@@ -478,14 +480,7 @@ WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, cons
       go_progress_t_ = t;
       go_progress_at_ = {p.x, p.y};
     } else if (t - go_progress_t_ > explore_.go_to_stuck_s && t >= backoff_until_) {
-      if (target_ == 0) {
-        survey_turned_ = -1;
-        Enter(MissionState::kModel, t, "survey point: no way found");
-        return Halt();
-      }
-      modeler_.GiveUp(target_, "no way to P1 found");
-      Enter(MissionState::kModel, t, "object " + std::to_string(target_) + ": no way to P1 found");
-      return Halt();
+      return AbandonGoTo(t, "no way found");
     }
   }
   if (bumped && t >= backoff_until_) {
@@ -499,14 +494,7 @@ WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, cons
       // A second contact on the way: the way there is blocked by things the
       // beams miss (chair legs). Do not push on through them: give the goal up
       // (the next behaviour gets clear of the contact first).
-      if (target_ == 0) {
-        survey_turned_ = -1;
-        Enter(MissionState::kModel, t, "survey point blocked by obstacles the sensors miss");
-        return Halt();
-      }
-      modeler_.GiveUp(target_, "the way to P1 is blocked by obstacles the sensors miss");
-      Enter(MissionState::kModel, t, "object " + std::to_string(target_) + ": way to P1 blocked");
-      return Halt();
+      return AbandonGoTo(t, "the way is blocked by obstacles the sensors miss");
     }
     if (!same) ++go_to_bumps_;
     BeginEscape(t, slam);

@@ -98,6 +98,8 @@ class Mission {
   WheelCommand StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);
   WheelCommand StepContour(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);
   bool Replan(const slam::Slam& slam, const RangeScan& scan);
+  // Gives the go-to's goal up (the object, noted in the model; or the survey point).
+  WheelCommand AbandonGoTo(double t, const std::string& why);
   // Picks the next survey point and starts going there; false if none is left.
   bool StartSurvey(double t, const slam::Slam& slam, const EnvironmentModel& m);
   // Getting clear of a contact during a go-to: turn away from it, drive off.

@@ -19,14 +19,6 @@
 namespace irslam {
 
 namespace {
-std::string DumpGpio(const drivers::GpioSettings& g) {
-  std::string out;
-  for (const auto* l : {&g.estop, &g.bumper_left, &g.bumper_right, &g.motor_enable, &g.status_led}) {
-    out += l->chip + "/" + l->line + "/" + (l->active_low ? "1" : "0") + ";";
-  }
-  return out;
-}
-
 int64_t Ns(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
 }
@@ -250,13 +242,11 @@ void Daemon::Reload() {
   const auto s = core_->state();
   if (s == control::MissionState::kIdle || s == control::MissionState::kDone) {
     pending_options_.reset();
-    if (DumpGpio(fresh.gpio) != DumpGpio(core_options_.gpio)) {
+    if (!fresh.gpio.SameLines(core_options_.gpio)) {
       std::fprintf(stderr, "<4>irslamd: [gpio] lines are opened at start: the change applies after a restart\n");
-      fresh.gpio.estop = core_options_.gpio.estop;
-      fresh.gpio.bumper_left = core_options_.gpio.bumper_left;
-      fresh.gpio.bumper_right = core_options_.gpio.bumper_right;
-      fresh.gpio.motor_enable = core_options_.gpio.motor_enable;
-      fresh.gpio.status_led = core_options_.gpio.status_led;
+      const double debounce_s = fresh.gpio.debounce_s;  // this applies at once
+      fresh.gpio = core_options_.gpio;
+      fresh.gpio.debounce_s = debounce_s;
     }
     core_options_ = fresh;
     auto next = std::make_unique<control::RobotCore>(fresh);

@@ -15,6 +15,7 @@ struct GpioLineSpec {
   std::string line;
   bool active_low = false;  // the line's active (pressed / on) level is low
   bool used() const { return !chip.empty(); }
+  bool operator==(const GpioLineSpec&) const = default;
 };
 
 // Config section [gpio]; every line is optional.
@@ -28,6 +29,11 @@ struct GpioSettings {
   bool any_used() const {
     return estop.used() || bumper_left.used() || bumper_right.used() || motor_enable.used() ||
            status_led.used();
+  }
+  // The same lines (the debounce time may differ: it applies at once).
+  bool SameLines(const GpioSettings& o) const {
+    return estop == o.estop && bumper_left == o.bumper_left && bumper_right == o.bumper_right &&
+           motor_enable == o.motor_enable && status_led == o.status_led;
   }
 };
 

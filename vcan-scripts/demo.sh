@@ -25,25 +25,9 @@ run=$(mktemp -d /tmp/irslam-demo.XXXXXX)
 bus=$(irslam_pick_bus "$run")
 export IRSLAM_SOCKET=$run/irslamd.sock
 bin=$IRSLAM_BUILD
-pids=()
-cleanup() {
-  for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
-  wait 2>/dev/null || true
-  rm -rf "$run"
-}
-trap cleanup EXIT
 
 echo "demo: world $(basename "$world"), bus $bus, time scale ${scale}x, output in $out"
-"$bin/tests/sim/irslam-sim" serve --can "$bus" --world "$world" --time-scale "$scale" \
-    --truth-out "$out/truth.json" 2>"$out/irslam-sim.log" &
-pids+=($!)
-"$bin/daemon/irslamd" --can "$bus" --socket "$IRSLAM_SOCKET" --time-scale "$scale" \
-    --config "$IRSLAM_ROOT/daemon/irslamd.conf" --state-dir "$out/state" 2>"$out/irslamd.log" &
-pids+=($!)
-for _ in $(seq 50); do
-  "$bin/daemon/irslamctl" status >/dev/null 2>&1 && break
-  sleep 0.1
-done
+irslam_start "$run" "$bus" "$IRSLAM_SOCKET" "$scale" "$out" "$world" --truth-out "$out/truth.json"
 "$bin/daemon/irslamctl" start
 "$bin/daemon/irslamctl" watch &
 watch_pid=$!
@@ -55,8 +39,8 @@ echo
 "$bin/daemon/irslamctl" map --out "$out/map.json" --svg "$out/map.svg"
 "$bin/daemon/irslamctl" status
 "$bin/daemon/irslamctl" stop >/dev/null
-kill -TERM "${pids[0]}" 2>/dev/null || true
-wait "${pids[0]}" 2>/dev/null || true
+kill -TERM "${IRSLAM_PIDS[0]}" 2>/dev/null || true
+wait "${IRSLAM_PIDS[0]}" 2>/dev/null || true
 if [ $status -ne 0 ]; then
   echo "demo: the mission did not reach 'done' within ${limit}s; the map so far is in $out/map.json" >&2
   exit 1

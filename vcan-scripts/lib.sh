@@ -1,4 +1,4 @@
-# Shared by demo.sh and test.sh: locate the project and build it.
+# Shared by the scripts: locate the project, build it, start the processes.
 IRSLAM_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 IRSLAM_BUILD=${IRSLAM_BUILD:-$IRSLAM_ROOT/build}
 
@@ -17,4 +17,37 @@ irslam_pick_bus() {
   else
     echo "unix:$1/bus"
   fi
+}
+
+# Starts irslam-sim serve (the simulated controller) and irslamd on a bus, both
+# killed and the run directory removed when the script exits; waits until the
+# daemon answers and hears the controller. Sets IRSLAM_PIDS=(sim daemon).
+#   irslam_start RUN_DIR BUS SOCKET TIME_SCALE OUT_DIR WORLD [more irslam-sim serve args...]
+# Logs go to OUT_DIR/irslam-sim.log and OUT_DIR/irslamd.log, the map to OUT_DIR/state.
+irslam_start() {
+  local run=$1 bus=$2 sock=$3 scale=$4 out=$5 world=$6
+  shift 6
+  IRSLAM_RUN_DIR=$run
+  IRSLAM_PIDS=()
+  trap irslam_cleanup EXIT
+  "$IRSLAM_BUILD/tests/sim/irslam-sim" serve --can "$bus" --world "$world" --time-scale "$scale" "$@" \
+    2>"$out/irslam-sim.log" &
+  IRSLAM_PIDS+=($!)
+  "$IRSLAM_BUILD/daemon/irslamd" --can "$bus" --socket "$sock" --time-scale "$scale" \
+    --config "$IRSLAM_ROOT/daemon/irslamd.conf" --state-dir "$out/state" 2>"$out/irslamd.log" &
+  IRSLAM_PIDS+=($!)
+  # Ready when the daemon answers and hears the controller.
+  for _ in $(seq 100); do
+    "$IRSLAM_BUILD/daemon/irslamctl" --socket "$sock" status --json 2>/dev/null |
+      grep -Eq '"alive": ?true' && return 0
+    sleep 0.1
+  done
+  echo "irslamd did not answer on $sock or heard no controller (see $out/irslamd.log)" >&2
+  return 1
+}
+
+irslam_cleanup() {
+  for p in "${IRSLAM_PIDS[@]}"; do kill "$p" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  rm -rf "$IRSLAM_RUN_DIR"
 }

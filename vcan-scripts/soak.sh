@@ -35,23 +35,10 @@ wall_s=$(awk "BEGIN{print int($robot_s/$scale)+1}")
 faults="loss:p=0.01,duplicate:p=0.01,reorder:p=0.01,delay:p=0.01:max=0.02,corrupt:p=0.002"
 faults+=",burst:every=97:len=0.05,flood:at=600:for=300:rate=2000,stuck_ir:sensor=5:at=1200:for=600"
 faults+=",encoder_glitch:at=3000:counts=2000,silence:at=4000:for=1.5:reset=1"
-pids=()
-cleanup() {
-  for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
-  wait 2>/dev/null || true
-  rm -rf "$run"
-}
-trap cleanup EXIT
 echo "soak: ${hours} h of robot time at ${scale}x (${wall_s} s wall), faults: $faults" >&2
-"$bin/tests/sim/irslam-sim" serve --can "$bus" --world "$IRSLAM_ROOT/tests/worlds/fig14.json" \
-  --time-scale "$scale" --faults "$faults" 2>"$out/irslam-sim.log" &
-pids+=($!)
-"$bin/daemon/irslamd" --can "$bus" --socket "$sock" --time-scale "$scale" \
-  --config "$IRSLAM_ROOT/daemon/irslamd.conf" --state-dir "$out/state" 2>"$out/irslamd.log" &
-dpid=$!
-pids+=($dpid)
+irslam_start "$run" "$bus" "$sock" "$scale" "$out" "$IRSLAM_ROOT/tests/worlds/fig14.json" --faults "$faults"
+dpid=${IRSLAM_PIDS[1]}
 ctl() { "$bin/daemon/irslamctl" --socket "$sock" "$@"; }
-for _ in $(seq 100); do ctl status >/dev/null 2>&1 && break; sleep 0.1; done
 echo "wall_s,robot_s,rss_kb,fds,state,missions" > "$out/soak.csv"
 missions=0
 start=$(date +%s)

@@ -81,6 +81,24 @@ class E2eTest : public ::testing::Test {
     std::filesystem::remove_all(dir_);
   }
 
+  // The loopback bus (this host), not SocketCAN (a vcan interface in the VM).
+  bool IsLoopback() const { return bus_.rfind("unix:", 0) == 0; }
+
+  // A stand-in for systemd's notify socket at dir_/notify.sock: its path, and
+  // the bound datagram socket (receives time out after timeout_s; 0: block).
+  std::string BindNotifySocket(double timeout_s, int* fd) const {
+    const std::string path = dir_ + "/notify.sock";
+    *fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", path.c_str());
+    EXPECT_EQ(::bind(*fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0) << path;
+    const long us = static_cast<long>(timeout_s * 1e6);
+    timeval tv{us / 1000000, us % 1000000};
+    if (us > 0) ::setsockopt(*fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    return path;
+  }
+
   // The daemon's config file in the test directory (tests may rewrite it for SIGHUP).
   std::string ConfigPath() const { return dir_ + "/irslamd.conf"; }
   // Where the daemon saves its map.
@@ -305,7 +323,7 @@ TEST_F(E2eTest, BadFramesAreCountedAndDroppedWhileTheRobotKeepsGoing) {
   }
   Sleep(0.5);
   const auto after = WaitRobotTime(before["robot_time"].get<double>() + 8);
-  if (bus_.rfind("unix:", 0) == 0) {
+  if (IsLoopback()) {
     // Loopback bus: filtered in user space, and counted.
     EXPECT_EQ(after["can"]["filtered"].get<uint64_t>() - before["can"]["filtered"].get<uint64_t>(), 60u);
   } else {
@@ -468,15 +486,8 @@ TEST_F(E2eTest, SighupReloadsAGoodConfigAndKeepsTheOldOneOnABadOne) {
 }
 
 TEST_F(E2eTest, TellsSystemdReadyStatusAndFeedsTheWatchdog) {
-  // A stand-in for systemd's notify socket.
-  const std::string notify = dir_ + "/notify.sock";
-  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  sockaddr_un addr{};
-  addr.sun_family = AF_UNIX;
-  std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", notify.c_str());
-  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
-  timeval tv{0, 200000};
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  int fd;
+  const std::string notify = BindNotifySocket(0.2, &fd);
   StartOptions o;
   o.world = "fig14.json";
   o.daemon_env = {"NOTIFY_SOCKET=" + notify, "WATCHDOG_USEC=200000"};
@@ -506,14 +517,8 @@ TEST_F(E2eTest, TellsSystemdReadyStatusAndFeedsTheWatchdog) {
 // WATCHDOG_USEC, kills the daemon with SIGABRT as systemd does and starts it
 // again (Restart=on-failure); the new one is READY and has the saved map.
 TEST_F(E2eTest, AHungLoopStopsTheWatchdogPingsAndARestartFindsTheMap) {
-  const std::string notify = dir_ + "/notify.sock";
-  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  sockaddr_un addr{};
-  addr.sun_family = AF_UNIX;
-  std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", notify.c_str());
-  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
-  timeval tv{0, 20000};
-  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  int fd;
+  const std::string notify = BindNotifySocket(0.02, &fd);
   const double watchdog_s = 1.0;  // pings every 0.5 s; a loaded host stays well inside
   StartOptions o;
   o.daemon_env = {"NOTIFY_SOCKET=" + notify, "WATCHDOG_USEC=" + std::to_string(static_cast<int>(watchdog_s * 1e6))};
@@ -574,12 +579,8 @@ TEST_F(E2eTest, AHungLoopStopsTheWatchdogPingsAndARestartFindsTheMap) {
 // messages) must not stall the control loop: notifications that do not fit are
 // dropped and counted.
 TEST_F(E2eTest, AnUndrainedNotifySocketDoesNotStallTheLoop) {
-  const std::string notify = dir_ + "/notify.sock";
-  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-  sockaddr_un addr{};
-  addr.sun_family = AF_UNIX;
-  std::snprintf(addr.sun_path, sizeof addr.sun_path, "%s", notify.c_str());
-  ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  int fd;
+  const std::string notify = BindNotifySocket(0, &fd);
   StartOptions o;
   o.daemon_env = {"NOTIFY_SOCKET=" + notify, "WATCHDOG_USEC=100000"};  // a ping every 50 ms
   StartAll(o);
@@ -659,7 +660,7 @@ TEST_F(E2eTest, FrameSentWithCansendInDbcLayoutIsDecoded) {
 }
 
 TEST_F(E2eTest, InterfaceDownAndUpIsSurvivedWithoutRestart) {
-  if (bus_.rfind("unix:", 0) == 0) {
+  if (IsLoopback()) {
     GTEST_SKIP() << "needs a SocketCAN interface: runs in the VM suite (vcan-scripts/vm-test.sh)";
   }
   StartAll();
@@ -691,7 +692,7 @@ TEST_F(E2eTest, InterfaceDownAndUpIsSurvivedWithoutRestart) {
 }
 
 TEST_F(E2eTest, ErrorFramesAndKernelDropsAreCounted) {
-  if (bus_.rfind("unix:", 0) == 0 || ::access("/usr/bin/cansend", X_OK) != 0) {
+  if (IsLoopback() || ::access("/usr/bin/cansend", X_OK) != 0) {
     GTEST_SKIP() << "needs SocketCAN and can-utils: runs in the VM suite (vcan-scripts/vm-test.sh)";
   }
   StartAll();
@@ -930,7 +931,7 @@ TEST_F(E2eTest, AFloodOfForeignFramesNeitherOverrunsTheLoopNorStarvesTheApi) {
               mean_during * 1e3, pq["overruns"].get<int>(), pf["overruns"].get<int>(), worst_call * 1e3);
   // 8000 frames per wall second for (28 - 10) s of robot time.
   const double expected = 8000 * (flooded["robot_time"].get<double>() - 10) / kScale;
-  if (bus_.rfind("unix:", 0) == 0) {
+  if (IsLoopback()) {
     EXPECT_GT(flooded["can"]["filtered"].get<double>(), 0.7 * expected) << "the flood did not arrive";
   } else {
     // SocketCAN: the kernel's id filter keeps the flood out of user space.

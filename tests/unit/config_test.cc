@@ -133,3 +133,24 @@ TEST(AccessTest, PeerGroupsIncludeThePrimaryAndSupplementaryGroups) {
 
 }  // namespace
 }  // namespace irslam
+
+namespace irslam {
+namespace {
+
+// SIGHUP keeps the GPIO lines opened at start: only a change of lines needs a
+// restart; a new debounce time applies at once.
+TEST(ConfigTest, GpioLinesCompareWithoutTheDebounceTime) {
+  drivers::GpioSettings a, b;
+  a.estop = {"gpio-sim-robot", "estop", true};
+  b = a;
+  b.debounce_s = 0.05;
+  EXPECT_TRUE(a.SameLines(b));
+  b.estop.active_low = false;
+  EXPECT_FALSE(a.SameLines(b));
+  b = a;
+  b.status_led.chip = "gpiochip0";
+  EXPECT_FALSE(a.SameLines(b));
+}
+
+}  // namespace
+}  // namespace irslam
