@@ -47,10 +47,31 @@ Box FaceBox(const std::vector<Side>& sides, const std::vector<size_t>& group, co
     if (s.seen_from < 0) lo = lo ? std::min(*lo, s.c) : s.c;
     if (s.seen_from > 0) hi = hi ? std::max(*hi, s.c) : s.c;
   }
-  if (xmin && *xmin < ends.xmin + kBeyond) b.xmin = *xmin;
-  if (ymin && *ymin < ends.ymin + kBeyond) b.ymin = *ymin;
-  if (xmax && *xmax > ends.xmax - kBeyond) b.xmax = *xmax;
-  if (ymax && *ymax > ends.ymax - kBeyond) b.ymax = *ymax;
+  // Without a face that way: the mean of the ends that reach the extreme (one
+  // end alone may be past the corner by the noise, another short of it).
+  const auto mean_end = [&](bool horizontal_sides, bool high, double extreme) {
+    double sum = 0;
+    int n = 0;
+    for (size_t i : group) {
+      const Side& s = sides[i];
+      // The extreme is a side's own offset (a face, seen from wherever): keep it.
+      if (s.horizontal != horizontal_sides && std::abs(s.c - extreme) < 1e-9) return extreme;
+    }
+    for (size_t i : group) {
+      const Side& s = sides[i];
+      if (s.horizontal != horizontal_sides) continue;
+      const double e = high ? s.a1 : s.a0;
+      if (std::abs(e - extreme) < kBeyond) {
+        sum += e;
+        ++n;
+      }
+    }
+    return n > 0 ? sum / n : extreme;
+  };
+  b.xmin = xmin && *xmin < ends.xmin + kBeyond ? *xmin : mean_end(true, false, ends.xmin);
+  b.ymin = ymin && *ymin < ends.ymin + kBeyond ? *ymin : mean_end(false, false, ends.ymin);
+  b.xmax = xmax && *xmax > ends.xmax - kBeyond ? *xmax : mean_end(true, true, ends.xmax);
+  b.ymax = ymax && *ymax > ends.ymax - kBeyond ? *ymax : mean_end(false, true, ends.ymax);
   return b;
 }
 

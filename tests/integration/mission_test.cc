@@ -32,9 +32,10 @@ TEST_P(PaperWorldTest, ReachesDoneFindingAndClassifyingEveryPieceWithoutTouching
     EXPECT_EQ(sc.kind_right, sc.pieces) << "seed " << seed;
     EXPECT_EQ(sc.complete, sc.pieces) << "seed " << seed;
     EXPECT_EQ(sc.extra, 0) << "seed " << seed;
-    // Box edges: the target is 5 cm; over 20 seeds per world 76 of 80 runs meet
-    // it and the worst is 8 cm (docs/accuracy.md). These two seeds: within 6 cm.
-    EXPECT_LE(sc.max_edge_m, 0.06) << "seed " << seed;
+    // Box edges within 5 cm (over 20 seeds per world, 77 of 80 runs; the worst,
+    // 12 cm, a compound piece whose taller box's top was never mapped:
+    // docs/accuracy.md).
+    EXPECT_LE(sc.max_edge_m, 0.05) << "seed " << seed;
     // The map's objects all carry the contract's fields.
     const nlohmann::json map = run.core->Map();
     for (const auto& o : map["objects"]) {

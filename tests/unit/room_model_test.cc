@@ -120,6 +120,20 @@ TEST(RoomModelTest, BoxEdgesComeFromTheFacesNotTheEnds) {
   EXPECT_TRUE(model.objects[0].complete);
 }
 
+TEST(RoomModelTest, AnUnseenFaceLiesAtTheMeanOfTheEndsThatReachIt) {
+  auto lines = Room();
+  // A free box 1.5..2.1 x 1.5..2.1, its right face never mapped: the bottom side
+  // was seen 5 cm past the corner, the top one 3 cm short of it.
+  lines.push_back(Line(10, 1.5, 1.5, 2.15, 1.5));
+  lines.push_back(Line(12, 2.07, 2.1, 1.5, 2.1));
+  lines.push_back(Line(13, 1.5, 2.08, 1.5, 1.52));
+  Modeler m{ModelOptions{}};
+  const auto& model = m.Update(lines, Loop());
+  ASSERT_EQ(model.objects.size(), 1u);
+  EXPECT_NEAR(model.objects[0].box.xmax, 2.11, 1e-9);
+  EXPECT_NEAR(model.objects[0].box.xmin, 1.5, 1e-9);
+}
+
 TEST(RoomModelTest, ABoxInACornerOfTheRoomIsCompleteWithItsTwoFreeSides) {
   // Room walls in pieces around a box in the top-left corner (x 0..0.7, y 3.2..4).
   std::vector<slam::LineFeature> lines = {Line(1, 0, 0, 4, 0), Line(2, 4, 0, 4, 4), Line(3, 4, 4, 0.7, 4),
