@@ -249,9 +249,7 @@ void Mission::BeginEscape(double t, const slam::Slam& slam) {
   escape_heading_ = NormalizeAngle(me.theta + contact + M_PI);
   double nearest = geometry_.radius_m + 0.08;
   for (const auto& l : slam.lines()) {
-    const Eigen::Vector2d d = l.p1 - l.p0;
-    const double u = d.squaredNorm() > 0 ? std::clamp((pos - l.p0).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
-    const Eigen::Vector2d away = pos - (l.p0 + u * d);
+    const Eigen::Vector2d away = pos - ClosestPoint({l.p0, l.p1}, pos);
     if (away.norm() < nearest && away.norm() > 1e-6) {
       nearest = away.norm();
       escape_heading_ = std::atan2(away.y(), away.x());

@@ -7,14 +7,16 @@
 namespace irslam::control {
 namespace {
 
-double SegmentDistance(const Eigen::Vector2d& p, const Obstacle& o) {
+double SegmentDistance(const Eigen::Vector2d& p, const Obstacle& o) { return (p - ClosestPoint(o, p)).norm(); }
+
+}  // namespace
+
+Eigen::Vector2d ClosestPoint(const Obstacle& o, const Eigen::Vector2d& p) {
   const Eigen::Vector2d d = o.b - o.a;
   const double l2 = d.squaredNorm();
   const double u = l2 > 0 ? std::clamp((p - o.a).dot(d) / l2, 0.0, 1.0) : 0.0;
-  return (p - (o.a + u * d)).norm();
+  return o.a + u * d;
 }
-
-}  // namespace
 
 std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>& obstacles,
                                                      const Eigen::Vector2d& start,

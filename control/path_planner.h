@@ -24,6 +24,9 @@ struct Obstacle {
   Eigen::Vector2d a, b;  // a segment (a == b: a point)
 };
 
+// The point of the obstacle nearest p.
+Eigen::Vector2d ClosestPoint(const Obstacle& o, const Eigen::Vector2d& p);
+
 // A path from start to goal (both included), simplified to its corners; nullopt if
 // the goal cannot be reached. A start inside the inflation, even within hard_m,
 // is allowed (the robot may stand closer to a wall than the clearance, or where

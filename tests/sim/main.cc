@@ -94,25 +94,20 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
   uint64_t seed;
   FaultSpec faults;
   if (!Load(c, &world, &core_opts, &seed) || !LoadFaults(c, &faults)) return kExitUsage;
-  // Optionally record every extracted line observation (irslam-weights reads them).
+  // Optional outputs (an empty path: not asked for).
+  const auto open_out = [](const std::string& path, std::ofstream* out) {
+    if (path.empty()) return true;
+    out->open(path);
+    if (!*out) std::fprintf(stderr, "irslam-sim: cannot write %s\n", path.c_str());
+    return static_cast<bool>(*out);
+  };
+  // Every extracted line observation (irslam-weights reads them).
   std::ofstream lines_file;
-  if (!lines_out.empty()) {
-    lines_file.open(lines_out);
-    if (!lines_file) {
-      std::fprintf(stderr, "irslam-sim: cannot write %s\n", lines_out.c_str());
-      return 1;
-    }
-  }
+  if (!open_out(lines_out, &lines_file)) return 1;
   // Optionally record every change of mission state, reason or behaviour, with
   // the true and the estimated pose (world frame / map frame).
   std::ofstream events_file;
-  if (!events_out.empty()) {
-    events_file.open(events_out);
-    if (!events_file) {
-      std::fprintf(stderr, "irslam-sim: cannot write %s\n", events_out.c_str());
-      return 1;
-    }
-  }
+  if (!open_out(events_out, &events_file)) return 1;
   std::string last_event;
   int windows_seen = 0;
   auto record = [&](const InProcessRun& r) {
