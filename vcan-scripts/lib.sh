@@ -30,7 +30,7 @@ irslam_start() {
   IRSLAM_RUN_DIR=$run
   IRSLAM_PIDS=()
   trap irslam_cleanup EXIT
-  "$IRSLAM_BUILD/tests/sim/irslam-sim" serve --can "$bus" --world "$world" --time-scale "$scale" "$@" \
+  "$IRSLAM_BUILD/sim/irslam-sim" serve --can "$bus" --world "$world" --time-scale "$scale" "$@" \
     2>"$out/irslam-sim.log" &
   IRSLAM_PIDS+=($!)
   "$IRSLAM_BUILD/daemon/irslamd" --can "$bus" --socket "$sock" --time-scale "$scale" \

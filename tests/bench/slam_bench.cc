@@ -8,7 +8,7 @@
 #include "slam/line_ekf.h"
 #include "slam/line_extraction.h"
 #include "slam/slam.h"
-#include "tests/sim/sim_run.h"
+#include "sim/sim_run.h"
 
 namespace irslam::slam {
 namespace {

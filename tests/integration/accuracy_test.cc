@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "control/robot_core.h"
-#include "tests/sim/sim_run.h"
+#include "sim/sim_run.h"
 #include "tests/testing/worlds.h"
 #include "tests/tools/metrics.h"
 

@@ -35,7 +35,7 @@ using Clock = std::chrono::steady_clock;
 
 const std::string kBin = IRSLAM_BINARY_DIR;
 const std::string kSrc = IRSLAM_SOURCE_DIR;
-const std::string kSim = kBin + "/tests/sim/irslam-sim";
+const std::string kSim = kBin + "/sim/irslam-sim";
 const std::string kDaemon = kBin + "/daemon/irslamd";
 const std::string kCtl = kBin + "/daemon/irslamctl";
 // Robot time runs this much faster than wall time (IRSLAM_TEST_TIME_SCALE: lower

@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "tests/sim/world.h"
+#include "sim/world.h"
 
 namespace irslam::testing {
 

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "slam/slam.h"
-#include "tests/sim/world.h"
+#include "sim/world.h"
 
 namespace irslam::metrics {
 

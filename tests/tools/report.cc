@@ -10,7 +10,7 @@
 
 #include "control/robot_core.h"
 #include "daemon/config.h"
-#include "tests/sim/sim_run.h"
+#include "sim/sim_run.h"
 #include "tests/tools/metrics.h"
 #include "tests/tools/svg_chart.h"
 

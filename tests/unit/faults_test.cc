@@ -1,9 +1,9 @@
-// The simulator's fault injection (tests/sim/faults.h): the SPEC grammar and what
+// The simulator's fault injection (sim/faults.h): the SPEC grammar and what
 // each fault does to the controller's frames.
 #include <gtest/gtest.h>
 
 #include "proto/codec.h"
-#include "tests/sim/faults.h"
+#include "sim/faults.h"
 
 namespace irslam::sim {
 namespace {

@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "control/robot_core.h"
-#include "tests/sim/sim_run.h"
+#include "sim/sim_run.h"
 
 namespace irslam::sim {
 namespace {

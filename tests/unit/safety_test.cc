@@ -5,7 +5,7 @@
 #include "control/robot_core.h"
 #include "control/safety.h"
 #include "proto/codec.h"
-#include "tests/sim/sim_run.h"
+#include "sim/sim_run.h"
 
 namespace irslam::control {
 namespace {

@@ -4,7 +4,7 @@
 
 #include "control/robot_core.h"
 #include "proto/codec.h"
-#include "tests/sim/sim_run.h"
+#include "sim/sim_run.h"
 
 namespace irslam::sim {
 namespace {

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "tests/sim/world.h"
+#include "sim/world.h"
 
 namespace irslam::sim {
 namespace {

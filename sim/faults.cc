@@ -1,4 +1,4 @@
-#include "tests/sim/faults.h"
+#include "sim/faults.h"
 
 #include <cmath>
 #include <map>

@@ -16,7 +16,7 @@
 
 #include "drivers/ir_calibration.h"
 #include "slam/slam.h"
-#include "tests/sim/world.h"
+#include "sim/world.h"
 
 namespace irslam::sim {
 

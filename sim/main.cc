@@ -17,9 +17,9 @@
 #include "drivers/can_bus.h"
 #include "proto/codec.h"
 #include "proto/json_text.h"
-#include "tests/sim/faults.h"
-#include "tests/sim/sim_controller.h"
-#include "tests/sim/sim_run.h"
+#include "sim/faults.h"
+#include "sim/sim_controller.h"
+#include "sim/sim_run.h"
 
 namespace irslam::sim {
 namespace {
@@ -50,7 +50,7 @@ struct Common {
   std::string config_path;
   std::optional<uint64_t> seed;
   std::string truth_out;
-  std::string faults;  // --faults SPEC (tests/sim/faults.h, docs/reliability.md)
+  std::string faults;  // --faults SPEC (sim/faults.h, docs/reliability.md)
 };
 
 bool Load(const Common& c, World* world, control::CoreOptions* core, uint64_t* seed) {

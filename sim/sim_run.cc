@@ -1,4 +1,4 @@
-#include "tests/sim/sim_run.h"
+#include "sim/sim_run.h"
 
 namespace irslam::sim {
 

@@ -8,8 +8,8 @@
 #include <string>
 
 #include "control/robot_core.h"
-#include "tests/sim/faults.h"
-#include "tests/sim/sim_controller.h"
+#include "sim/faults.h"
+#include "sim/sim_controller.h"
 
 namespace irslam::sim {
 
