@@ -6,12 +6,16 @@
 #include <set>
 #include <sstream>
 
-#include "proto/json_text.h"
+#include "io/file_io.h"
+#include "io/json_text.h"
 
 namespace irslam {
 namespace {
 
 using nlohmann::json;
+
+// A config file is a few kB; anything much larger is not one.
+constexpr size_t kMaxConfigBytes = 1 << 20;
 
 // Reads keys of one JSON object, remembering which ones were used so unknown keys
 // can be reported by name.
@@ -401,14 +405,12 @@ bool ParseConfig(std::string_view text, control::CoreOptions* options, std::stri
 }
 
 bool LoadConfigFile(const std::string& path, control::CoreOptions* options, std::string* error) {
-  std::ifstream in(path);
-  if (!in) {
-    *error = "config: cannot read " + path;
+  std::string text;
+  if (!ReadRegularFile(path, kMaxConfigBytes, &text, error)) {
+    *error = "config: " + *error;
     return false;
   }
-  std::stringstream ss;
-  ss << in.rdbuf();
-  if (!ParseConfig(ss.str(), options, error)) {
+  if (!ParseConfig(text, options, error)) {
     *error = path + ": " + *error;
     return false;
   }

@@ -1,6 +1,6 @@
 #include "daemon/jsonrpc.h"
 
-#include "proto/json_text.h"
+#include "io/json_text.h"
 
 namespace irslam::rpc {
 

@@ -10,7 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "proto/json_text.h"
+#include "io/json_text.h"
 
 namespace irslam {
 

@@ -16,7 +16,7 @@
 #include "daemon/map_svg.h"
 #include "drivers/can_bus.h"
 #include "proto/codec.h"
-#include "proto/json_text.h"
+#include "io/json_text.h"
 #include "sim/faults.h"
 #include "sim/sim_controller.h"
 #include "sim/sim_run.h"

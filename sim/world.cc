@@ -6,10 +6,14 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "proto/json_text.h"
+#include "io/file_io.h"
+#include "io/json_text.h"
 
 namespace irslam::sim {
 namespace {
+
+// A world file is a few kB (a generated one with clutter some tens of kB).
+constexpr size_t kMaxWorldBytes = 4 << 20;
 
 using nlohmann::json;
 
@@ -163,14 +167,12 @@ std::optional<World> ParseWorld(std::string_view text, std::string* error) {
 }
 
 std::optional<World> LoadWorldFile(const std::string& path, std::string* error) {
-  std::ifstream in(path);
-  if (!in) {
-    *error = "world: cannot read " + path;
+  std::string text;
+  if (!ReadRegularFile(path, kMaxWorldBytes, &text, error)) {
+    *error = "world: " + *error;
     return std::nullopt;
   }
-  std::stringstream ss;
-  ss << in.rdbuf();
-  auto w = ParseWorld(ss.str(), error);
+  auto w = ParseWorld(text, error);
   if (!w) *error = path + ": " + *error;
   return w;
 }

@@ -21,7 +21,7 @@
 
 #include "daemon/rpc_client.h"
 #include "proto/codec.h"
-#include "proto/json_text.h"
+#include "io/json_text.h"
 #include "tests/testing/bus_tap.h"
 #include "tests/testing/dbc.h"
 #include "tests/testing/process.h"

@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
-#include "proto/json_text.h"
+#include "io/json_text.h"
 
 namespace {
 

@@ -1,8 +1,10 @@
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "daemon/access.h"
 #include "daemon/config.h"
-#include "proto/json_text.h"
+#include "io/json_text.h"
 #include "tests/testing/process.h"
 
 namespace irslam {
@@ -88,7 +90,32 @@ TEST(ConfigTest, MissingFileIsOneLine) {
   control::CoreOptions o;
   std::string error;
   EXPECT_FALSE(LoadConfigFile("/nonexistent/irslamd.conf", &o, &error));
-  EXPECT_EQ(error, "config: cannot read /nonexistent/irslamd.conf");
+  EXPECT_EQ(error, "config: cannot read /nonexistent/irslamd.conf: No such file or directory");
+}
+
+// Issue 12: a FIFO as config hung start-up (and SIGHUP hung the loop); /dev/zero
+// aborted with bad_alloc; a file nested 150,000 levels deep crashed the parser.
+TEST(ConfigTest, AFifoOrDeviceIsRefusedAtOnce) {
+  const std::string dir = ::testing::TempDir() + "/config-fifo-" + std::to_string(::getpid());
+  ::mkdir(dir.c_str(), 0700);
+  const std::string fifo = dir + "/irslamd.conf";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  control::CoreOptions o;
+  std::string error;
+  EXPECT_FALSE(LoadConfigFile(fifo, &o, &error));
+  EXPECT_EQ(error, "config: cannot read " + fifo + ": not a regular file");
+  EXPECT_FALSE(LoadConfigFile("/dev/zero", &o, &error));
+  EXPECT_EQ(error, "config: cannot read /dev/zero: not a regular file");
+  ::unlink(fifo.c_str());
+  ::rmdir(dir.c_str());
+}
+
+TEST(ConfigTest, DeepNestingIsOneLineNotACrash) {
+  control::CoreOptions o;
+  std::string error;
+  const std::string deep = "{\"slam\": " + std::string(150000, '[') + std::string(150000, ']') + "}";
+  EXPECT_FALSE(ParseConfig(deep, &o, &error));
+  EXPECT_EQ(error, "config: nested deeper than 64 levels");
 }
 
 }  // namespace
