@@ -12,8 +12,8 @@ namespace {
 
 sim::World Load(const std::string& name) { return testing::LoadTestWorld(name); }
 
-std::vector<metrics::TimedPose> Truth(const nlohmann::json& arr) {
-  std::vector<metrics::TimedPose> out;
+std::vector<TimedPose> Truth(const nlohmann::json& arr) {
+  std::vector<TimedPose> out;
   for (const auto& p : arr) out.push_back({p[0], {p[1], p[2], p[3]}});
   return out;
 }

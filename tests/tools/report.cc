@@ -28,14 +28,14 @@ struct Run {
   double line_dist_max = 0, line_angle_max = 0;
   double aligned_wall_dist_max = 0, aligned_wall_angle_max = 0;  // map shape, after BestAlignment
   int lines = 0, wall_lines = 0, unmatched = 0;
-  std::vector<metrics::TimedPose> est, truth, odometry;
+  std::vector<TimedPose> est, truth, odometry;
   std::vector<double> loop_times;
   // Covariance over time: (t, robot heading sigma), (t, mean line sigma theta), (t, mean line sigma rho)
   std::vector<std::pair<double, double>> pose_sigma, line_sigma_theta, line_sigma_rho;
 };
 
-std::vector<metrics::TimedPose> FromJson(const nlohmann::json& arr) {
-  std::vector<metrics::TimedPose> out;
+std::vector<TimedPose> FromJson(const nlohmann::json& arr) {
+  std::vector<TimedPose> out;
   for (const auto& p : arr) out.push_back({p[0], {p[1], p[2], p[3]}});
   return out;
 }

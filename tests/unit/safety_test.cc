@@ -172,10 +172,10 @@ TEST(BumperBitTest, AControllerBumperBitCountsWhenTwoStatusFramesCarryIt) {
     core.OnFrame(proto::Encode(st), 1.0 + 0.05 * i);
   };
   send(0, 0);
-  send(proto::kBumperLeft, 1);  // a flipped bit: one frame only
+  send(kBumperLeft, 1);  // a flipped bit: one frame only
   send(0, 2);
-  send(proto::kBumperRight, 3);  // a real contact: it lasts
-  send(proto::kBumperRight, 4);
+  send(kBumperRight, 3);  // a real contact: it lasts
+  send(kBumperRight, 4);
   const auto s = core.Status(1.2);
   EXPECT_EQ(s["frames"]["bumper_unconfirmed"], 1);
 }

@@ -20,7 +20,7 @@ World OpenRoom(double slip, double mismatch) {
   return w;
 }
 
-can_frame Cmd(double l, double r) { return proto::Encode(proto::WheelCommand{l, r, true, 0}); }
+can_frame Cmd(double l, double r) { return proto::Encode(proto::WheelCmd{l, r, true, 0}); }
 
 TEST(SimControllerTest, DrivesStraightAndEncodesCounts) {
   const auto core = control::DefaultCoreOptions();
@@ -71,7 +71,7 @@ TEST(SimControllerTest, CollisionStopsTheRobotAndSetsABumper) {
   }
   EXPECT_NEAR(sim.true_pose().x, 11.0 - core.slam.geometry.radius_m, 0.01);
   EXPECT_EQ(sim.collisions(), 1u);
-  EXPECT_EQ(sim.bumpers(), proto::kBumperLeft | proto::kBumperRight);
+  EXPECT_EQ(sim.bumpers(), kBumperLeft | kBumperRight);
 }
 
 TEST(SimControllerTest, SameSeedSameRun) {
