@@ -1,10 +1,12 @@
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 
 #include <cmath>
 
 #include "proto/codec.h"
 
-namespace irslam::control {
+namespace irslam::robot {
+
+using namespace control;  // NOLINT(google-build-using-namespace): the behaviours RobotCore orchestrates
 
 CoreOptions DefaultCoreOptions() {
   CoreOptions o;
@@ -274,4 +276,4 @@ nlohmann::json RobotCore::Map() const {
   };
 }
 
-}  // namespace irslam::control
+}  // namespace irslam::robot
