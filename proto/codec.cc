@@ -204,8 +204,9 @@ DecodeResult Decode(const can_frame& f) {
   const auto u16 = [&](size_t i) { return static_cast<uint16_t>(Raw(f, i)); };
   switch (spec->id) {
     case kWheelCmdId:
-      r.message = WheelCmd{GetPhysical(f.data, spec->signals[0]),
-                               GetPhysical(f.data, spec->signals[1]), Raw(f, 2) != 0, u8(3)};
+      r.message = WheelCmd{{GetPhysical(f.data, spec->signals[0]), GetPhysical(f.data, spec->signals[1]),
+                            Raw(f, 2) != 0},
+                           u8(3)};
       break;
     case kDaemonHeartbeatId:
       r.message = DaemonHeartbeat{u8(0), u8(1)};

@@ -24,7 +24,7 @@ World Room(double size) {
   return w;
 }
 
-can_frame Cmd(double l, double r) { return proto::Encode(proto::WheelCmd{l, r, true, 0}); }
+can_frame Cmd(double l, double r) { return proto::Encode(proto::WheelCmd{{l, r, true}, 0}); }
 
 // Turns on the spot for `seconds` and returns the true heading change.
 double TurnInPlace(const World& w, double seconds) {

@@ -20,7 +20,7 @@ World OpenRoom(double slip, double mismatch) {
   return w;
 }
 
-can_frame Cmd(double l, double r) { return proto::Encode(proto::WheelCmd{l, r, true, 0}); }
+can_frame Cmd(double l, double r) { return proto::Encode(proto::WheelCmd{{l, r, true}, 0}); }
 
 TEST(SimControllerTest, DrivesStraightAndEncodesCounts) {
   const auto core = robot::DefaultCoreOptions();
