@@ -655,7 +655,8 @@ void ApiServer::OnControl(std::weak_ptr<Session> session,
     return;
   }
   const bool readable = req->method == "status" || req->method == "map";
-  if (readable && req->params.empty() && dispatcher_->MaySubscribe(peer)) {
+  // Neither takes params (contracts.md §6): padded params must not get past the sharing.
+  if (readable && dispatcher_->MaySubscribe(peer)) {
     const auto it = cache_.find(req->method);
     if (it != cache_.end() && it->second.result && it->second.period == period_) {
       ++counters_->coalesced;
