@@ -16,6 +16,7 @@
 # period statistics, the sampled jitter percentiles, the watchdog gaps, the API
 # counters and the load average.
 #   vcan-scripts/api-load.sh [SECONDS]      (IRSLAM_BUILD=dir of a built tree)
+#   API_LOAD_CLIENTS=0 vcan-scripts/api-load.sh   the same measurement without load
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 seconds=${1:-30}
@@ -148,7 +149,8 @@ sel.register(notify, selectors.EVENT_READ, "notify")
 
 # With the measurer, max_clients clients: the server is full from the start.
 plan = ["deep", "big", "map", "sub", "deep", "big", "map", "slowloris", "idle"]
-clients = [Client(plan[i % len(plan)]) for i in range(max_clients - 1)]
+hostile = int(os.environ.get("API_LOAD_CLIENTS", max_clients - 1))  # 0: a baseline without load
+clients = [Client(plan[i % len(plan)]) for i in range(hostile)]
 t_end = time.monotonic() + seconds
 while time.monotonic() < t_end:
     for key, ev in sel.select(timeout=0.05):
@@ -196,7 +198,7 @@ def pct(q):
     return js[min(len(js) - 1, int(q * len(js)))] * 1e3 if js else float('nan')
 gaps = [b - a for a, b in zip(pings, pings[1:])]
 print("api-load: %.0f s of load, %d hostile clients + 1 measurer (re-subscribed %d times)" % (
-    seconds, max_clients - 1, meas_evicted))
+    seconds, hostile, meas_evicted))
 print("  stop during the load: %s in %.1f ms" % (json.loads(reply.split(b'\n')[0]).get("result", reply[:80]), stop_ms))
 print("  period: target %.3f s, ticks %d (expected ~%d), overruns %d, work_max %.3f ms" % (
     per["target"], per["ticks"], int(status["uptime"] / per["target"]), per["overruns"], per["work_max"] * 1e3))
