@@ -24,11 +24,11 @@ int64_t Ns(std::chrono::steady_clock::time_point t) {
 }
 }  // namespace
 
-Daemon::Daemon(boost::asio::io_context& io, DaemonOptions options, control::CoreOptions core)
+Daemon::Daemon(boost::asio::io_context& io, DaemonOptions options, robot::CoreOptions core)
     : io_(io),
       options_(std::move(options)),
       core_options_(core),
-      core_(std::make_unique<control::RobotCore>(core)),
+      core_(std::make_unique<robot::RobotCore>(core)),
       timer_(io),
       signals_(io, SIGINT, SIGTERM, SIGHUP),
       start_(Clock::now()),
@@ -82,7 +82,7 @@ bool Daemon::Open(std::string* error) {
 
 void Daemon::OnGpioInput(drivers::Gpio::Input input, bool active) {
   using In = drivers::Gpio::Input;
-  using Safety = control::RobotCore::SafetyInput;
+  using Safety = robot::RobotCore::SafetyInput;
   const double now = RobotNow();
   const bool was_latched = core_->estop_latched();
   core_->OnSafetyInput(input == In::kEstop        ? Safety::kEstop
@@ -229,7 +229,7 @@ void Daemon::Reload() {
     std::fprintf(stderr, "<5>irslamd: SIGHUP: no --config file, nothing to reload\n");
     return;
   }
-  control::CoreOptions fresh = control::DefaultCoreOptions();
+  robot::CoreOptions fresh = robot::DefaultCoreOptions();
   std::string error;
   if (!LoadConfigFile(options_.config_path, &fresh, &error)) {
     std::fprintf(stderr, "<3>irslamd: reload failed, keeping the running config: %s\n",
@@ -246,7 +246,7 @@ void Daemon::Reload() {
       fresh.gpio.debounce_s = debounce_s;
     }
     core_options_ = fresh;
-    auto next = std::make_unique<control::RobotCore>(fresh);
+    auto next = std::make_unique<robot::RobotCore>(fresh);
     core_ = std::move(next);
     if (gpio_) gpio_->Replay();  // the new core learns the inputs' present levels
     scheduler_ = PeriodScheduler(static_cast<int64_t>(fresh.period_s / options_.time_scale * 1e9),

@@ -11,7 +11,7 @@
 #include <optional>
 #include <string>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 #include "daemon/access.h"
 #include "daemon/api_server.h"
 #include "daemon/map_store.h"
@@ -34,7 +34,7 @@ struct DaemonOptions {
 
 class Daemon : public ApiServer::Dispatcher {
  public:
-  Daemon(boost::asio::io_context& io, DaemonOptions options, control::CoreOptions core);
+  Daemon(boost::asio::io_context& io, DaemonOptions options, robot::CoreOptions core);
   ~Daemon() override;
 
   // Opens the bus and the socket; false with a one-line *error.
@@ -68,9 +68,9 @@ class Daemon : public ApiServer::Dispatcher {
 
   boost::asio::io_context& io_;
   DaemonOptions options_;
-  control::CoreOptions core_options_;
-  std::optional<control::CoreOptions> pending_options_;
-  std::unique_ptr<control::RobotCore> core_;
+  robot::CoreOptions core_options_;
+  std::optional<robot::CoreOptions> pending_options_;
+  std::unique_ptr<robot::RobotCore> core_;
   std::unique_ptr<drivers::CanBus> bus_;
   std::unique_ptr<ApiServer> api_;
   std::unique_ptr<drivers::Gpio> gpio_;
