@@ -114,7 +114,7 @@ struct ApiServer::Loop {
 struct ApiServer::Counters {
   std::atomic<uint64_t> accepted{0}, rejected_full{0}, requests{0}, errors{0}, dropped_slow{0},
       dropped_long_line{0}, dropped_idle{0}, dropped_line_timeout{0}, evicted_idle{0},
-      control_slot{0}, accept_backoffs{0}, coalesced{0}, paused{0};
+      control_slot{0}, accept_backoffs{0}, coalesced{0}, paused{0}, cpu_pauses{0};
 };
 
 // Lives on the API thread: every member function runs there.
@@ -155,6 +155,9 @@ class ApiServer::Session : public std::enable_shared_from_this<Session> {
                   rpc::MessageText(rpc::MakeError(nullptr, rpc::kRejected, why)));
     Close();
   }
+
+  // Goes on after a pause for the API thread's CPU budget.
+  void Resume() { Continue(); }
 
   // No request of this client is waiting for the control loop.
   bool idle() const { return at_control_ == 0; }
@@ -284,12 +287,22 @@ class ApiServer::Session : public std::enable_shared_from_this<Session> {
         LongLine();
         return;
       }
+      if (!server_->CpuBudgetLeft()) {
+        // The API thread used its share of this window: go on in the next one.
+        line_waiting_ = true;
+        server_->Defer(weak_from_this());
+        return;
+      }
       std::string_view line(inbuf_.data() + head_, nl - head_);
       while (!line.empty() && (line.back() == '\r' || line.back() == '\n')) line.remove_suffix(1);
       head_ = nl + 1;
       scan_ = head_;
       partial_ = false;  // a next line starts now
-      if (!line.empty()) HandleLine(line);
+      if (!line.empty()) {
+        const auto t0 = Clock::now();
+        HandleLine(line);
+        server_->Spent(Clock::now() - t0);
+      }
     }
   }
 
@@ -436,12 +449,15 @@ ApiServer::ApiServer(asio::io_context& control, std::string path, ApiLimits limi
       limits_(limits),
       dispatcher_(dispatcher),
       loop_(std::make_shared<Loop>()),
-      counters_(std::make_unique<Counters>()) {}
+      counters_(std::make_unique<Counters>()),
+      resume_timer_(std::make_unique<asio::steady_timer>(loop_->io)) {}
 
 ApiServer::~ApiServer() {
   Close();
   alive_.reset();
   acceptor_.reset();
+  resume_timer_.reset();
+  deferred_.clear();
   sessions_.clear();
   loop_.reset();  // pending handlers (and the sessions they hold) go with it
 }
@@ -611,6 +627,35 @@ void ApiServer::Admit(Local::socket socket, PeerCred peer) {
   s->Start();
 }
 
+bool ApiServer::CpuBudgetLeft() {
+  const auto now = Clock::now();
+  const auto window = Seconds(limits_.cpu_window_s);
+  if (now - window_start_ >= window) {
+    window_start_ = now;
+    window_spent_ = {};
+  }
+  return window_spent_ < Seconds(limits_.cpu_window_s * limits_.cpu_share);
+}
+
+void ApiServer::Spent(Clock::duration d) { window_spent_ += d; }
+
+void ApiServer::Defer(std::weak_ptr<Session> s) {
+  deferred_.push_back(std::move(s));
+  if (resume_armed_) return;
+  resume_armed_ = true;
+  ++counters_->cpu_pauses;
+  resume_timer_->expires_at(window_start_ + Seconds(limits_.cpu_window_s));
+  resume_timer_->async_wait([this](const error_code& ec) {
+    resume_armed_ = false;
+    if (ec) return;
+    auto waiting = std::move(deferred_);
+    deferred_.clear();
+    for (auto& w : waiting) {
+      if (const auto session = w.lock()) session->Resume();
+    }
+  });
+}
+
 void ApiServer::Remove(Session* s) {
   sessions_.remove_if([s](const std::shared_ptr<Session>& p) { return p.get() == s; });
   clients_ = sessions_.size();
@@ -705,6 +750,7 @@ void ApiServer::Close() {
       if (acceptor_) acceptor_->close(ec);
       auto copy = sessions_;
       for (auto& s : copy) s->Close();
+      resume_timer_->cancel();
       done.set_value();
     });
     done.get_future().wait();
@@ -733,6 +779,7 @@ ApiStats ApiServer::stats() const {
   s.accept_backoffs = c.accept_backoffs;
   s.coalesced = c.coalesced;
   s.paused = c.paused;
+  s.cpu_pauses = c.cpu_pauses;
   return s;
 }
 
@@ -750,7 +797,8 @@ nlohmann::json ApiServer::StatsJson() const {
           {"control_slot", a.control_slot},
           {"accept_backoffs", a.accept_backoffs},
           {"coalesced", a.coalesced},
-          {"paused", a.paused}};
+          {"paused", a.paused},
+          {"cpu_pauses", a.cpu_pauses}};
 }
 
 }  // namespace irslam

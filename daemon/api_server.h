@@ -19,6 +19,7 @@
 
 #include <atomic>
 #include <boost/asio/io_context.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <boost/asio/local/stream_protocol.hpp>
 #include <cstdint>
 #include <functional>
@@ -51,6 +52,11 @@ struct ApiLimits {
   size_t max_inflight = 4;             // unanswered requests per client before it is no longer read
   double line_timeout_s = 10;          // a line must be complete this long after its first byte
   double accept_backoff_s = 0.1;       // pause before accepting again when out of file descriptors
+  // The API thread handles requests for at most cpu_share of each cpu_window_s
+  // (then every client waits for the next window), so a flood of requests
+  // cannot take a whole core from the control loop on a small machine.
+  double cpu_share = 0.25;
+  double cpu_window_s = 0.02;
 };
 
 struct PeerCred {
@@ -76,6 +82,7 @@ struct ApiStats {
   uint64_t accept_backoffs = 0;       // accept failed for lack of file descriptors
   uint64_t coalesced = 0;             // status/map/notification answers served from this period's result
   uint64_t paused = 0;                // a client hit max_inflight and was not read until answered
+  uint64_t cpu_pauses = 0;            // windows in which the API thread used up its CPU share
 };
 
 class ApiServer {
@@ -140,6 +147,10 @@ class ApiServer {
   void Accept();
   void Admit(boost::asio::local::stream_protocol::socket socket, PeerCred peer);
   void Remove(Session* s);
+  // API thread: the CPU budget of the current window (see ApiLimits::cpu_share).
+  bool CpuBudgetLeft();
+  void Spent(std::chrono::steady_clock::duration d);
+  void Defer(std::weak_ptr<Session> s);
   // API thread: hands a request (null: a notification payload) to the control loop.
   void PostToControl(std::weak_ptr<Session> session, std::shared_ptr<const rpc::Request> request,
                      PeerCred peer);
@@ -168,6 +179,11 @@ class ApiServer {
   std::unique_ptr<boost::asio::local::stream_protocol::acceptor> acceptor_;
   std::list<std::shared_ptr<Session>> sessions_;
   std::map<std::string, std::pair<std::shared_ptr<const nlohmann::json>, std::string>> texts_;
+  std::unique_ptr<boost::asio::steady_timer> resume_timer_;
+  std::vector<std::weak_ptr<Session>> deferred_;
+  std::chrono::steady_clock::time_point window_start_{};
+  std::chrono::steady_clock::duration window_spent_{};
+  bool resume_armed_ = false;
   bool accepting_ = false;
 };
 

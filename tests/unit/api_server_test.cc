@@ -315,6 +315,24 @@ TEST_F(ApiServerTest, APipeliningClientIsNotReadPastItsBudgetUntilAnswered) {
   EXPECT_EQ(answered, 5);
 }
 
+TEST_F(ApiServerTest, TheApiThreadKeepsToItsCpuShareAndStillServesEveryone) {
+  ApiLimits limits;
+  limits.cpu_share = 1e-6;  // 50 ns per 50 ms window: about one line per window
+  limits.cpu_window_s = 0.05;
+  limits.max_inflight = 64;
+  StartServer(limits);
+  auto c = Client();
+  std::string error, batch;
+  for (int i = 1; i <= 20; ++i) {
+    batch += R"({"jsonrpc":"2.0","id":)" + std::to_string(i) + R"(,"method":"status"})" "\n";
+  }
+  ASSERT_TRUE(c->SendRaw(batch, &error));
+  int answered = 0;
+  while (answered < 20 && c->ReadLine(5, &error)) ++answered;
+  EXPECT_EQ(answered, 20) << error;
+  EXPECT_GE(server_->stats().cpu_pauses, 10u);
+}
+
 TEST_F(ApiServerTest, SubscribeRateMustBePositiveAndWithinTheLimitAndATinyOneDoesNotFlood) {
   StartServer({});
   std::string error;
