@@ -157,7 +157,13 @@ class ApiServer::Session : public std::enable_shared_from_this<Session> {
   }
 
   // Goes on after a pause for the API thread's CPU budget.
-  void Resume() { Continue(); }
+  // It may handle one line whatever the budget: every waiting client makes
+  // progress in every window (a `stop` waits at most one window).
+  void Resume() {
+    deferred_ = false;
+    turn_ = true;
+    Continue();
+  }
 
   // No request of this client is waiting for the control loop.
   bool idle() const { return at_control_ == 0; }
@@ -287,10 +293,11 @@ class ApiServer::Session : public std::enable_shared_from_this<Session> {
         LongLine();
         return;
       }
-      if (!server_->CpuBudgetLeft()) {
+      if (!turn_ && !server_->CpuBudgetLeft()) {
         // The API thread used its share of this window: go on in the next one.
         line_waiting_ = true;
-        server_->Defer(weak_from_this());
+        if (!deferred_) server_->Defer(weak_from_this());  // once: one turn per window
+        deferred_ = true;
         return;
       }
       std::string_view line(inbuf_.data() + head_, nl - head_);
@@ -300,6 +307,7 @@ class ApiServer::Session : public std::enable_shared_from_this<Session> {
       partial_ = false;  // a next line starts now
       if (!line.empty()) {
         const auto t0 = Clock::now();
+        turn_ = false;
         HandleLine(line);
         server_->Spent(Clock::now() - t0);
       }
@@ -433,6 +441,8 @@ class ApiServer::Session : public std::enable_shared_from_this<Session> {
   bool reading_ = false;
   bool writing_ = false;
   bool line_waiting_ = false;  // a complete line waits for budget
+  bool turn_ = false;          // resumed after a CPU pause: one line is due
+  bool deferred_ = false;      // waiting in the server's list for the next window
   bool partial_ = false;       // inbuf_ ends with an unfinished line, begun at partial_since_
   bool line_timer_armed_ = false;
   bool subscribed_ = false;
