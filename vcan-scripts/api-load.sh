@@ -17,6 +17,8 @@
 # counters and the load average.
 #   vcan-scripts/api-load.sh [SECONDS]      (IRSLAM_BUILD=dir of a built tree)
 #   API_LOAD_CLIENTS=0 vcan-scripts/api-load.sh   the same measurement without load
+#   API_LOAD_NICE=19 vcan-scripts/api-load.sh     the load client niced
+#   API_LOAD_RT=1 vcan-scripts/api-load.sh        irslamd under SCHED_FIFO (root)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 seconds=${1:-30}
@@ -29,10 +31,14 @@ mkdir -p "$out"
 sock=$run/irslamd.sock
 export NOTIFY_SOCKET=$run/notify WATCHDOG_USEC=2000000
 irslam_start "$run" "unix:$run/bus" "$sock" 1 "$out" "$IRSLAM_ROOT/tests/worlds/fig14.json"
+# API_LOAD_RT=1: irslamd's threads under SCHED_FIFO 10 (needs root): what the
+# loop would get with real-time scheduling from the unit.
+[ "${API_LOAD_RT:-}" = 1 ] && chrt -a -f -p 10 "${IRSLAM_PIDS[1]}"
 "$bin/daemon/irslamctl" --socket "$sock" start >/dev/null
 echo "api-load: mission started; ${seconds}s of hostile API load (time scale 1)" >&2
 
-python3 - "$sock" "$NOTIFY_SOCKET" "$seconds" "$IRSLAM_ROOT/daemon/irslamd.conf" <<'EOF'
+# API_LOAD_NICE=19: the load client runs niced (tells our own cost from the CPU the attacker takes).
+${API_LOAD_NICE:+nice -n "$API_LOAD_NICE"} python3 - "$sock" "$NOTIFY_SOCKET" "$seconds" "$IRSLAM_ROOT/daemon/irslamd.conf" <<'EOF'
 import json, os, re, selectors, socket, sys, time
 
 sock_path, notify_path, seconds, conf = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
