@@ -206,7 +206,9 @@ class ApiServer::Session : public std::enable_shared_from_this<Session> {
 
   void MaybeFinish() {
     if (closed_ || writing_ || !queue_.empty()) return;
-    if (close_after_write_ || (eof_ && at_control_ == 0)) Close();
+    // Requests already at the control loop are answered first (a `stop` in the
+    // reserved slot followed by something else still gets its reply).
+    if ((close_after_write_ || eof_) && at_control_ == 0) Close();
   }
 
   void ArmIdle() {
