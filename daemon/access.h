@@ -22,9 +22,12 @@ struct AccessPolicy {
 
 enum class Access { kRead, kControl };
 
-// groups: the peer's primary and supplementary groups.
+// groups: the peer's primary and supplementary groups, as the kernel gives them
+// for the connection (SO_PEERGROUPS: PeerCred::groups in api_server.h).
 bool Allowed(const AccessPolicy& policy, uid_t uid, const std::vector<gid_t>& groups, Access need);
-// The peer's groups (primary gid plus the supplementary groups of its user).
+// The groups /etc/group gives a user (primary gid plus its supplementary groups).
+// Not for access checks: a process may hold groups its user is not listed in
+// (setgroups, sg, systemd SupplementaryGroups=) and lose ones it is.
 std::vector<gid_t> PeerGroups(uid_t uid, gid_t gid);
 // Looks a group name up; nullopt (and *error) when it does not exist.
 std::optional<gid_t> GroupId(const std::string& name, std::string* error);

@@ -74,11 +74,7 @@ bool Daemon::Open(std::string* error) {
     if (!*out) return false;
   }
   api_ = std::make_unique<ApiServer>(io_, options_.socket_path, options_.limits, this);
-  if (!api_->Listen(error)) return false;
-  if (socket_gid && ::chown(options_.socket_path.c_str(), static_cast<uid_t>(-1), *socket_gid) != 0) {
-    *error = "api: cannot give " + options_.socket_path + " to group " + a.socket_group;
-    return false;
-  }
+  if (!api_->Listen(error, socket_gid)) return false;
   bus_->Start([this](const can_frame& f, double) { core_->OnFrame(f, RobotNow()); });
   gpio_->Start([this](drivers::Gpio::Input in, bool active) { OnGpioInput(in, active); });
   return true;
@@ -177,6 +173,7 @@ void Daemon::ArmTimer() {
 void Daemon::OnTick() {
   const auto woke = Clock::now();
   scheduler_.OnWake(Ns(woke));
+  if (api_) api_->NewPeriod();
   const double now = RobotNow();
   if (options_.test_hang_at_s >= 0 && now >= options_.test_hang_at_s) {
     std::fprintf(stderr, "<3>irslamd: --test-hang-at: the control loop hangs now (a test of the watchdog)\n");
@@ -282,10 +279,7 @@ nlohmann::json Daemon::StatusJson() {
               {"link_up", c.link_up},      {"link_down_events", c.link_down_events},
               {"last_error", c.last_error},
               {"last_rx_time", c.last_rx_time},   {"kernel_timestamps", c.kernel_timestamps}};
-  const auto& a = api_->stats();
-  s["api"] = {{"clients", api_->client_count()}, {"requests", a.requests}, {"errors", a.errors},
-              {"dropped_slow", a.dropped_slow}, {"dropped_long_line", a.dropped_long_line},
-              {"rejected_full", a.rejected_full}};
+  s["api"] = api_->StatsJson();
   s["config_pending"] = pending_options_.has_value();
   s["notify_dropped"] = notify_dropped_;
   nlohmann::json lines = nlohmann::json::object();
@@ -307,14 +301,18 @@ nlohmann::json Daemon::StatusJson() {
 nlohmann::json Daemon::StatusNotification() { return StatusJson(); }
 
 bool Daemon::MaySubscribe(const PeerCred& peer) {
-  return Allowed(access_, peer.uid, PeerGroups(peer.uid, peer.gid), Access::kRead);
+  return Allowed(access_, peer.uid, peer.groups, Access::kRead);
 }
 
-nlohmann::json Daemon::Handle(const rpc::Request& req, const PeerCred& peer) {
+void Daemon::Handle(const rpc::Request& req, const PeerCred& peer, Reply reply) {
+  reply(HandleNow(req, peer));
+}
+
+nlohmann::json Daemon::HandleNow(const rpc::Request& req, const PeerCred& peer) {
   const double now = RobotNow();
   const bool control = req.method == "start" || req.method == "stop";
-  if (!Allowed(access_, peer.uid, PeerGroups(peer.uid, peer.gid), control ? Access::kControl : Access::kRead)) {
-    std::fprintf(stderr, "<4>api: denied method=%s uid=%u pid=%d\n", req.method.c_str(),
+  if (!Allowed(access_, peer.uid, peer.groups, control ? Access::kControl : Access::kRead)) {
+    std::fprintf(stderr, "<4>api: denied method=%s uid=%u pid=%d\n", rpc::EscapeForLog(req.method).c_str(),
                  static_cast<unsigned>(peer.uid), static_cast<int>(peer.pid));
     return rpc::MakeError(req.id, rpc::kAccessDenied,
                           "access denied: " + req.method + " needs the " +

@@ -43,7 +43,7 @@ class Daemon : public ApiServer::Dispatcher {
   int Run();
 
   // ApiServer::Dispatcher
-  nlohmann::json Handle(const rpc::Request& request, const PeerCred& peer) override;
+  void Handle(const rpc::Request& request, const PeerCred& peer, Reply reply) override;
   bool MaySubscribe(const PeerCred& peer) override;
   nlohmann::json StatusNotification() override;
 
@@ -57,6 +57,8 @@ class Daemon : public ApiServer::Dispatcher {
   void Reload();
   void Shutdown();
   nlohmann::json StatusJson();
+  // The synchronous body of Handle.
+  nlohmann::json HandleNow(const rpc::Request& request, const PeerCred& peer);
   void Notify(const std::string& text);
   void OnGpioInput(drivers::Gpio::Input input, bool active);
   // Saves the map (if a mission ran since start) atomically in the state directory.

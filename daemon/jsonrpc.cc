@@ -1,5 +1,7 @@
 #include "daemon/jsonrpc.h"
 
+#include <algorithm>
+
 #include "io/json_text.h"
 
 namespace irslam::rpc {
@@ -14,6 +16,37 @@ nlohmann::json MakeError(const nlohmann::json& id, int code, const std::string& 
 
 nlohmann::json MakeNotification(const std::string& method, nlohmann::json params) {
   return {{"jsonrpc", "2.0"}, {"method", method}, {"params", std::move(params)}};
+}
+
+std::string MessageText(const nlohmann::json& message) { return DumpJson(message); }
+
+std::string ResultText(const nlohmann::json& id, const std::string& result_text) {
+  // The keys in the order nlohmann's object (sorted) gives them: id, jsonrpc, result.
+  std::string text = "{\"id\":";
+  text += DumpJson(id);
+  text += ",\"jsonrpc\":\"2.0\",\"result\":";
+  text += result_text;
+  text += '}';
+  return text;
+}
+
+std::string EscapeForLog(std::string_view text, size_t max_bytes) {
+  std::string out;
+  const size_t n = std::min(text.size(), max_bytes);
+  out.reserve(n + 8);
+  for (size_t i = 0; i < n; ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c < 0x20 || c >= 0x7f || c == '\\') {
+      static constexpr char kHex[] = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  if (text.size() > max_bytes) out += "...";
+  return out;
 }
 
 ParseResult ParseRequest(std::string_view line) {

@@ -34,6 +34,18 @@ nlohmann::json MakeResult(const nlohmann::json& id, nlohmann::json result);
 nlohmann::json MakeError(const nlohmann::json& id, int code, const std::string& message);
 nlohmann::json MakeNotification(const std::string& method, nlohmann::json params);
 
+// The text the server sends for a message (response or notification), without
+// the newline. Never throws: invalid UTF-8 a client sent (echoed in an id or a
+// method name) is replaced with U+FFFD (io/json_text.h DumpJson).
+std::string MessageText(const nlohmann::json& message);
+// MessageText(MakeResult(id, result)) for a result already serialised as
+// result_text (one serialisation of `status` or `map` shared by many replies).
+std::string ResultText(const nlohmann::json& id, const std::string& result_text);
+
+// A client-supplied string made safe for one log line: control characters,
+// backslashes and bytes >= 0x7f as \xNN, at most max_bytes of input (then "...").
+std::string EscapeForLog(std::string_view text, size_t max_bytes = 64);
+
 }  // namespace irslam::rpc
 
 #endif  // IRSLAM_DAEMON_JSONRPC_H_

@@ -5,8 +5,10 @@
 #include <sys/un.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
@@ -28,7 +30,21 @@ void RpcClient::Close() {
   buffer_.clear();
 }
 
-bool RpcClient::Connect(const std::string& path, std::string* error) {
+namespace {
+using Clock = std::chrono::steady_clock;
+
+Clock::time_point Deadline(double timeout_s) {
+  return Clock::now() +
+         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
+}
+
+int MsLeft(Clock::time_point deadline) {
+  const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
+  return ms <= 0 ? 0 : static_cast<int>(std::min<int64_t>(ms, 1 << 30));
+}
+}  // namespace
+
+bool RpcClient::Connect(const std::string& path, std::string* error, double timeout_s) {
   Close();
   sockaddr_un addr{};
   addr.sun_family = AF_UNIX;
@@ -37,21 +53,60 @@ bool RpcClient::Connect(const std::string& path, std::string* error) {
     return false;
   }
   std::memcpy(addr.sun_path, path.c_str(), path.size() + 1);
-  fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  if (fd_ < 0 || ::connect(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
-    *error = "cannot reach irslamd at " + path + ": " + std::strerror(errno);
+  const auto fail = [&](const std::string& why) {
+    *error = "cannot reach irslamd at " + path + ": " + why;
     Close();
     return false;
+  };
+  // Non-blocking: a hung daemon whose backlog is full must not hang the caller.
+  fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+  if (fd_ < 0) return fail(std::strerror(errno));
+  const auto deadline = Deadline(timeout_s);
+  for (;;) {
+    if (::connect(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0) return true;
+    const int err = errno;
+    if (err == EINTR) continue;
+    if (err == EAGAIN) {  // a Unix socket's backlog is full: try again until the deadline
+      if (MsLeft(deadline) == 0) {
+        char msg[96];
+        std::snprintf(msg, sizeof msg, "timed out after %g s (its backlog is full)", timeout_s);
+        return fail(msg);
+      }
+      ::poll(nullptr, 0, std::min(10, MsLeft(deadline)));
+      continue;
+    }
+    if (err != EINPROGRESS) return fail(std::strerror(err));
+    pollfd p{fd_, POLLOUT, 0};
+    const int r = ::poll(&p, 1, MsLeft(deadline));
+    if (r < 0 && errno == EINTR) continue;
+    if (r == 0) {
+      char msg[64];
+      std::snprintf(msg, sizeof msg, "timed out after %g s", timeout_s);
+      return fail(msg);
+    }
+    int so_error = 0;
+    socklen_t len = sizeof so_error;
+    ::getsockopt(fd_, SOL_SOCKET, SO_ERROR, &so_error, &len);
+    if (so_error != 0) return fail(std::strerror(so_error));
+    return true;
   }
-  return true;
 }
 
 bool RpcClient::SendRaw(const std::string& text, std::string* error) {
   size_t off = 0;
+  const auto deadline = Deadline(kSendTimeoutS);
   while (off < text.size()) {
     const ssize_t n = ::send(fd_, text.data() + off, text.size() - off, MSG_NOSIGNAL);
     if (n < 0) {
       if (errno == EINTR) continue;
+      if (errno == EAGAIN) {  // the daemon reads slowly: wait, but not for ever
+        pollfd p{fd_, POLLOUT, 0};
+        if (MsLeft(deadline) == 0 || ::poll(&p, 1, MsLeft(deadline)) == 0) {
+          *error = "send: timed out: irslamd does not read";
+          return false;
+        }
+        continue;
+      }
       *error = std::string("send: ") + std::strerror(errno);
       return false;
     }
@@ -61,7 +116,6 @@ bool RpcClient::SendRaw(const std::string& text, std::string* error) {
 }
 
 std::optional<std::string> RpcClient::ReadLine(double timeout_s, std::string* error) {
-  using Clock = std::chrono::steady_clock;
   const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(timeout_s));
   for (;;) {
@@ -88,7 +142,7 @@ std::optional<std::string> RpcClient::ReadLine(double timeout_s, std::string* er
       return std::nullopt;
     }
     if (n < 0) {
-      if (errno == EINTR) continue;
+      if (errno == EINTR || errno == EAGAIN) continue;
       *error = std::string("recv: ") + std::strerror(errno);
       return std::nullopt;
     }

@@ -1,4 +1,4 @@
-// Blocking JSON-RPC client for the control API (irslamctl and the tests).
+// Blocking JSON-RPC client (every wait has a timeout) for the control API (irslamctl and the tests).
 #ifndef IRSLAM_DAEMON_RPC_CLIENT_H_
 #define IRSLAM_DAEMON_RPC_CLIENT_H_
 
@@ -15,7 +15,8 @@ class RpcClient {
   RpcClient(const RpcClient&) = delete;
   RpcClient& operator=(const RpcClient&) = delete;
 
-  bool Connect(const std::string& path, std::string* error);
+  // Gives up after timeout_s (a hung daemon whose backlog is full).
+  bool Connect(const std::string& path, std::string* error, double timeout_s = 5);
   // Sends a request and waits for its response (skipping notifications).
   // Returns the result; on a JSON-RPC error or I/O problem returns nullopt and
   // sets *error (one line).
@@ -29,6 +30,7 @@ class RpcClient {
   void Close();
 
  private:
+  static constexpr double kSendTimeoutS = 10;
   int fd_ = -1;
   int next_id_ = 1;
   std::string buffer_;

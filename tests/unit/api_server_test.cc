@@ -1,4 +1,17 @@
+#include <fcntl.h>
+#include <grp.h>
 #include <gtest/gtest.h>
+#include <poll.h>
+#include <sys/resource.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstring>
+#include <functional>
 
 #include <boost/asio/executor_work_guard.hpp>
 #include <boost/asio/post.hpp>
@@ -14,16 +27,28 @@ namespace {
 
 class FakeDispatcher : public ApiServer::Dispatcher {
  public:
-  nlohmann::json Handle(const rpc::Request& r, const PeerCred& peer) override {
+  void Handle(const rpc::Request& r, const PeerCred& peer, Reply reply) override {
     ++calls;
     last_uid = peer.uid;
-    if (r.method == "status") return rpc::MakeResult(r.id, {{"state", "idle"}});
-    return rpc::MakeError(r.id, rpc::kMethodNotFound, "method not found: " + r.method);
+    last_groups = peer.groups;
+    if (r.method == "status") {
+      ++status_builds;
+      reply(rpc::MakeResult(r.id, {{"state", "idle"}}));
+    } else if (r.method == "hold") {  // answered only when the test says so
+      held.push_back(std::move(reply));
+    } else if (r.method == "stop") {
+      reply(rpc::MakeResult(r.id, {{"state", "idle"}}));
+    } else {
+      reply(rpc::MakeError(r.id, rpc::kMethodNotFound, "method not found: " + r.method));
+    }
   }
   bool MaySubscribe(const PeerCred&) override { return true; }
   nlohmann::json StatusNotification() override { return {{"state", "idle"}, {"blob", blob}}; }
   std::atomic<int> calls{0};
   std::atomic<uid_t> last_uid{0};
+  std::atomic<int> status_builds{0};
+  std::vector<Reply> held;           // control thread only
+  std::vector<gid_t> last_groups;    // control thread only
   std::string blob;
 };
 
@@ -56,6 +81,20 @@ class ApiServerTest : public ::testing::Test {
     std::string error;
     EXPECT_TRUE(c->Connect(path_, &error)) << error;
     return c;
+  }
+  // Runs f on the control thread (io_) and waits for it.
+  void OnControl(const std::function<void()>& f) {
+    std::promise<void> done;
+    boost::asio::post(io_, [&] {
+      f();
+      done.set_value();
+    });
+    done.get_future().wait();
+  }
+  size_t Held() {
+    size_t n = 0;
+    OnControl([&] { n = dispatcher_.held.size(); });
+    return n;
   }
   static nlohmann::json Line(RpcClient& c) {
     std::string error;
@@ -94,7 +133,8 @@ TEST_F(ApiServerTest, GarbageGetsAParseErrorAndTheConnectionStaysUsable) {
   ASSERT_TRUE(c->SendRaw("\r\n\n{\"jsonrpc\":\"2.0\",\"method\":\"status\"}\n", &error));  // notification: no answer
   auto r = c->Call("status", nlohmann::json::object(), 5, &error);
   ASSERT_TRUE(r) << error;
-  EXPECT_EQ(dispatcher_.calls, 2);
+  // The notification's status and the call's: one built, one shared (same period).
+  EXPECT_EQ(dispatcher_.calls + server_->stats().coalesced, 2u);
 }
 
 TEST_F(ApiServerTest, OversizedLineIsAnsweredAndClosedWhileOthersAreServed) {
@@ -129,18 +169,327 @@ TEST_F(ApiServerTest, HalfSentLineThenHangUpLeavesTheServerFine) {
   EXPECT_TRUE(c->Call("status", nlohmann::json::object(), 5, &error)) << error;
 }
 
-TEST_F(ApiServerTest, RefusesClientsBeyondTheLimit) {
+TEST_F(ApiServerTest, AFullServerEvictsTheClientIdleLongestInsteadOfRefusing) {
+  // Before: two idle clients (one a subscriber at 0.001 Hz) locked everyone
+  // else out ("too many clients") for as long as they stayed.
   ApiLimits limits;
   limits.max_clients = 2;
   StartServer(limits);
-  auto a = Client(), b = Client();
   std::string error;
-  ASSERT_TRUE(a->Call("status", nlohmann::json::object(), 5, &error));
-  ASSERT_TRUE(b->Call("status", nlohmann::json::object(), 5, &error));
+  auto a = Client();
+  ASSERT_TRUE(a->Call("subscribe", {{"rate", 0.001}}, 5, &error)) << error;
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  auto b = Client();
+  ASSERT_TRUE(b->Call("status", nlohmann::json::object(), 5, &error)) << error;
   auto c = Client();
-  auto e = Line(*c);
-  EXPECT_EQ(e["error"]["message"], "too many clients");
-  EXPECT_TRUE(a->Call("status", nlohmann::json::object(), 5, &error)) << error;
+  ASSERT_TRUE(c->Call("status", nlohmann::json::object(), 5, &error)) << error;
+  const auto e = Line(*a);  // the oldest idle one made room, and was told why
+  EXPECT_EQ(e["error"]["code"], rpc::kRejected);
+  EXPECT_NE(e.dump().find("idle longest"), std::string::npos) << e.dump();
+  EXPECT_FALSE(a->ReadLine(2, &error));
+  EXPECT_TRUE(b->Call("status", nlohmann::json::object(), 5, &error)) << error;
+  EXPECT_EQ(server_->stats().evicted_idle, 1u);
+  EXPECT_EQ(server_->stats().rejected_full, 0u);
+  EXPECT_EQ(server_->client_count(), 2u);
+}
+
+TEST_F(ApiServerTest, StopGetsThroughTheReservedSlotWhenEveryClientIsBusy) {
+  ApiLimits limits;
+  limits.max_clients = 2;
+  StartServer(limits);
+  std::string error;
+  auto a = Client(), b = Client();
+  // Both have a request at the control loop: neither may be evicted.
+  ASSERT_TRUE(a->SendRaw(R"({"jsonrpc":"2.0","id":1,"method":"hold"})" "\n", &error));
+  ASSERT_TRUE(b->SendRaw(R"({"jsonrpc":"2.0","id":1,"method":"hold"})" "\n", &error));
+  for (int i = 0; i < 200 && Held() < 2; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ASSERT_EQ(Held(), 2u);
+  // The reserved slot serves start/stop only, then closes.
+  auto c = Client();
+  EXPECT_FALSE(c->Call("status", nlohmann::json::object(), 5, &error));
+  EXPECT_EQ(error, "too many clients: this connection may only start or stop the robot");
+  EXPECT_FALSE(c->ReadLine(2, &error));
+  auto d = Client();
+  auto e = Client();  // the slot is taken by d: refused
+  EXPECT_EQ(Line(*e)["error"]["message"], "too many clients");
+  auto r = d->Call("stop", nlohmann::json::object(), 5, &error);
+  ASSERT_TRUE(r) << error;
+  EXPECT_EQ((*r)["state"], "idle");
+  EXPECT_FALSE(d->ReadLine(2, &error));  // closed after its one reply
+  EXPECT_EQ(server_->stats().control_slot, 2u);
+  EXPECT_EQ(server_->stats().rejected_full, 1u);
+  OnControl([&] {
+    for (auto& reply : dispatcher_.held) reply(rpc::MakeResult(1, "released"));
+    dispatcher_.held.clear();
+  });
+  EXPECT_EQ(Line(*a)["result"], "released");
+  EXPECT_EQ(Line(*b)["result"], "released");
+}
+
+TEST_F(ApiServerTest, ASlowlorisIsDroppedWhenItsLineIsNotFinishedInTime) {
+  // Before: a client sending one byte at a time held its slot for idle_timeout_s.
+  ApiLimits limits;
+  limits.line_timeout_s = 0.3;
+  StartServer(limits);
+  auto slow = Client();
+  std::string error;
+  const std::string line = R"({"jsonrpc":"2.0","id":1,"method":"status"})";
+  bool cut = false;
+  for (int i = 0; i < 100 && !cut; ++i) {
+    cut = !slow->SendRaw(line.substr(i % line.size(), 1), &error);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    if (server_->stats().dropped_line_timeout > 0) break;
+  }
+  EXPECT_EQ(server_->stats().dropped_line_timeout, 1u);
+  auto e = Line(*slow);
+  EXPECT_NE(e.dump().find("not finished within"), std::string::npos) << e.dump();
+  EXPECT_EQ(server_->client_count(), 0u);
+}
+
+TEST_F(ApiServerTest, InvalidUtf8IsAnsweredInsteadOfEndingTheProcess) {
+  // Before: the reply echoed the raw byte and dump() threw type_error 316: SIGABRT.
+  StartServer({});
+  auto c = Client();
+  std::string error;
+  ASSERT_TRUE(c->SendRaw("{\"jsonrpc\":\"2.0\",\"id\":1,\"method\":\"\xff\"}\n", &error));
+  std::string error2;
+  auto raw = c->ReadLine(5, &error2);
+  ASSERT_TRUE(raw) << error2;
+  EXPECT_EQ(raw->find('\xff'), std::string::npos);  // never echoed raw
+  auto e = nlohmann::json::parse(*raw);
+  EXPECT_EQ(e["error"]["code"], rpc::kParseError);
+  EXPECT_NE(e["error"]["message"].get<std::string>().find("ill-formed UTF-8 byte; last read: '\"\xef\xbf\xbd'"),
+            std::string::npos) << *raw;  // U+FFFD in its place
+  ASSERT_TRUE(c->SendRaw("\xff\n", &error));
+  EXPECT_EQ(Line(*c)["error"]["code"], rpc::kParseError);
+  ASSERT_TRUE(c->SendRaw("\xff\xfe{\"\xc3\n", &error));
+  EXPECT_EQ(Line(*c)["error"]["code"], rpc::kParseError);
+  EXPECT_TRUE(c->Call("status", nlohmann::json::object(), 5, &error)) << error;
+}
+
+TEST_F(ApiServerTest, StatusIsBuiltOncePerPeriodHoweverManyAsk) {
+  StartServer({});
+  std::string error;
+  std::vector<std::unique_ptr<RpcClient>> clients;
+  for (int i = 0; i < 5; ++i) clients.push_back(Client());
+  for (auto& c : clients) {
+    for (int k = 0; k < 3; ++k) {
+      auto r = c->Call("status", nlohmann::json::object(), 5, &error);
+      ASSERT_TRUE(r) << error;
+      EXPECT_EQ((*r)["state"], "idle");
+    }
+  }
+  EXPECT_EQ(dispatcher_.status_builds, 1);
+  EXPECT_EQ(server_->stats().coalesced, 14u);
+  OnControl([&] { server_->NewPeriod(); });
+  ASSERT_TRUE(clients[0]->Call("status", nlohmann::json::object(), 5, &error)) << error;
+  EXPECT_EQ(dispatcher_.status_builds, 2);
+  // A command may change what status says: the next one is built afresh.
+  ASSERT_TRUE(clients[1]->Call("stop", nlohmann::json::object(), 5, &error)) << error;
+  ASSERT_TRUE(clients[1]->Call("status", nlohmann::json::object(), 5, &error)) << error;
+  EXPECT_EQ(dispatcher_.status_builds, 3);
+}
+
+TEST_F(ApiServerTest, APipeliningClientIsNotReadPastItsBudgetUntilAnswered) {
+  ApiLimits limits;
+  limits.max_inflight = 2;
+  StartServer(limits);
+  auto c = Client();
+  std::string error;
+  std::string batch;
+  for (int i = 1; i <= 5; ++i) {
+    batch += R"({"jsonrpc":"2.0","id":)" + std::to_string(i) + R"(,"method":"hold"})" "\n";
+  }
+  ASSERT_TRUE(c->SendRaw(batch, &error));
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  EXPECT_EQ(Held(), 2u);  // before: all 5 went to the control loop at once
+  EXPECT_GE(server_->stats().paused, 1u);
+  int answered = 0;
+  for (int round = 0; round < 10 && answered < 5; ++round) {
+    OnControl([&] {
+      for (auto& reply : dispatcher_.held) reply(rpc::MakeResult(0, "done"));
+      dispatcher_.held.clear();
+    });
+    while (c->ReadLine(0.2, &error)) ++answered;
+  }
+  EXPECT_EQ(answered, 5);
+}
+
+TEST_F(ApiServerTest, TheApiThreadKeepsToItsCpuShareAndStillServesEveryone) {
+  ApiLimits limits;
+  limits.cpu_share = 1e-6;  // 50 ns per 50 ms window: about one line per window
+  limits.cpu_window_s = 0.05;
+  limits.max_inflight = 64;
+  StartServer(limits);
+  auto c = Client();
+  std::string error, batch;
+  for (int i = 1; i <= 20; ++i) {
+    batch += R"({"jsonrpc":"2.0","id":)" + std::to_string(i) + R"(,"method":"status"})" "\n";
+  }
+  ASSERT_TRUE(c->SendRaw(batch, &error));
+  int answered = 0;
+  while (answered < 20 && c->ReadLine(5, &error)) ++answered;
+  EXPECT_EQ(answered, 20) << error;
+  EXPECT_GE(server_->stats().cpu_pauses, 10u);
+}
+
+TEST_F(ApiServerTest, SubscribeRateMustBePositiveAndWithinTheLimitAndATinyOneDoesNotFlood) {
+  StartServer({});
+  std::string error;
+  auto c = Client();
+  EXPECT_FALSE(c->Call("subscribe", {{"rate", 1000}}, 5, &error));
+  EXPECT_EQ(error, "invalid params: rate must be > 0 and <= 50 (Hz)");
+  EXPECT_FALSE(c->Call("subscribe", {{"rate", "fast"}}, 5, &error));
+  EXPECT_FALSE(c->Call("subscribe", {{"rate", 0}}, 5, &error));
+  // Before: 1/1e-11 s overflowed the timer's duration: ~12,000 notifications/s.
+  auto r = c->Call("subscribe", {{"rate", 1e-11}}, 5, &error);
+  ASSERT_TRUE(r) << error;
+  EXPECT_FALSE(c->NextNotification(0.5, &error));
+  EXPECT_EQ(error, "timed out waiting for irslamd");
+}
+
+TEST_F(ApiServerTest, OutOfFileDescriptorsTheAcceptLoopBacksOffInsteadOfSpinning) {
+  StartServer({});
+  rlimit saved{};
+  ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &saved), 0);
+  int client = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  ASSERT_GE(client, 0);
+  rlimit low = saved;
+  low.rlim_cur = static_cast<rlim_t>(client + 8);
+  ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &low), 0);
+  std::vector<int> fill;
+  for (int fd; (fd = ::open("/dev/null", O_RDONLY | O_CLOEXEC)) >= 0;) fill.push_back(fd);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::memcpy(addr.sun_path, path_.c_str(), path_.size() + 1);
+  ASSERT_EQ(::connect(client, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  rusage before{}, after{};
+  ::getrusage(RUSAGE_SELF, &before);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  ::getrusage(RUSAGE_SELF, &after);
+  const auto cpu_ms = [](const rusage& r) {
+    return (r.ru_utime.tv_sec + r.ru_stime.tv_sec) * 1e3 + (r.ru_utime.tv_usec + r.ru_stime.tv_usec) * 1e-3;
+  };
+  const double used = cpu_ms(after) - cpu_ms(before);
+  for (int fd : fill) ::close(fd);
+  ::setrlimit(RLIMIT_NOFILE, &saved);
+  EXPECT_LT(used, 100.0) << "ms of CPU in 500 ms without descriptors";  // before: ~500 (a core spun)
+  const uint64_t backoffs = server_->stats().accept_backoffs;
+  EXPECT_GE(backoffs, 2u);
+  EXPECT_LE(backoffs, 8u);
+  // With descriptors back, the waiting client is served.
+  const std::string req = R"({"jsonrpc":"2.0","id":1,"method":"status"})" "\n";
+  ASSERT_EQ(::send(client, req.data(), req.size(), MSG_NOSIGNAL), static_cast<ssize_t>(req.size()));
+  pollfd p{client, POLLIN, 0};
+  ASSERT_EQ(::poll(&p, 1, 5000), 1);
+  char buf[512];
+  const ssize_t n = ::recv(client, buf, sizeof buf, 0);
+  ::close(client);
+  ASSERT_GT(n, 0);
+  EXPECT_NE(std::string(buf, static_cast<size_t>(n)).find("idle"), std::string::npos);
+}
+
+TEST_F(ApiServerTest, GroupsComeFromTheKernelNotFromEtcGroup) {
+  // Before: /etc/group's view of the user, so a process holding the control
+  // group only as a supplementary group (setgroups, sg, SupplementaryGroups=) was refused.
+  if (::getuid() != 0) GTEST_SKIP() << "needs root to act as another user";
+  StartServer({});
+  ::chmod(path_.c_str(), 0666);
+  ::chmod(path_.substr(0, path_.rfind('/')).c_str(), 0755);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::memcpy(addr.sun_path, path_.c_str(), path_.size() + 1);
+  const std::string req = R"({"jsonrpc":"2.0","id":1,"method":"status"})" "\n";
+  const pid_t child = ::fork();
+  if (child == 0) {  // only async-signal-safe calls here
+    const gid_t extra[] = {4242};
+    if (::setgroups(1, extra) != 0 || ::setgid(65534) != 0 || ::setuid(65534) != 0) ::_exit(2);
+    const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) ::_exit(3);
+    if (::write(fd, req.data(), req.size()) != static_cast<ssize_t>(req.size())) ::_exit(4);
+    char buf[256];
+    ::_exit(::read(fd, buf, sizeof buf) > 0 ? 0 : 5);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+  std::vector<gid_t> groups;
+  OnControl([&] { groups = dispatcher_.last_groups; });
+  EXPECT_EQ(dispatcher_.last_uid, 65534u);
+  EXPECT_NE(std::find(groups.begin(), groups.end(), 4242u), groups.end());
+  EXPECT_NE(std::find(groups.begin(), groups.end(), 65534u), groups.end());
+  EXPECT_EQ(groups.size(), 2u);
+}
+
+TEST_F(ApiServerTest, RefusesToReplaceAFileThatIsNotASocket) {
+  // Before: --socket PATH unlinked whatever file was at PATH.
+  path_ = testing::MakeTempDir() + "/precious.txt";
+  {
+    FILE* f = std::fopen(path_.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs("keep me\n", f);
+    std::fclose(f);
+  }
+  ApiServer server(io_, path_, {}, &dispatcher_);
+  std::string error;
+  EXPECT_FALSE(server.Listen(&error));
+  EXPECT_EQ(error, "api: " + path_ + " exists and is not a socket: refusing to replace it");
+  EXPECT_EQ(testing::ReadFile(path_), "keep me\n");
+}
+
+TEST_F(ApiServerTest, LimitsBeyondTheirBoundsAreAOneLineError) {
+  path_ = testing::MakeTempDir() + "/api.sock";
+  ApiLimits big_line;
+  big_line.max_line_bytes = 16 << 20;
+  std::string error;
+  EXPECT_FALSE(ApiServer(io_, path_, big_line, &dispatcher_).Listen(&error));
+  EXPECT_EQ(error, "api: max_line_bytes 16777216 is outside 1..1048576");
+  ApiLimits many;
+  many.max_clients = MaxClientsForFdLimit() + 1;
+  EXPECT_FALSE(ApiServer(io_, path_, many, &dispatcher_).Listen(&error));
+  EXPECT_NE(error.find("RLIMIT_NOFILE"), std::string::npos) << error;
+}
+
+TEST_F(ApiServerTest, AGroupTheSocketCannotBeGivenToIsAOneLineError) {
+  if (::getuid() == 0) GTEST_SKIP() << "root may give the socket to any group";
+  path_ = testing::MakeTempDir() + "/api.sock";
+  ApiServer server(io_, path_, {}, &dispatcher_);
+  std::string error;
+  EXPECT_FALSE(server.Listen(&error, gid_t{0}));
+  EXPECT_NE(error.find("cannot give"), std::string::npos) << error;
+}
+
+TEST(RpcClientTest, ConnectGivesUpOnADaemonThatNeverAccepts) {
+  // Before: connect() blocked for good once the hung daemon's backlog was full.
+  const std::string path = testing::MakeTempDir() + "/hung.sock";
+  const int listener = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  sockaddr_un addr{};
+  addr.sun_family = AF_UNIX;
+  std::memcpy(addr.sun_path, path.c_str(), path.size() + 1);
+  ASSERT_EQ(::bind(listener, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+  ASSERT_EQ(::listen(listener, 0), 0);
+  std::vector<int> queued;  // fill the backlog
+  for (int i = 0; i < 16; ++i) {
+    const int fd = ::socket(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+      ::close(fd);
+      break;
+    }
+    queued.push_back(fd);
+  }
+  auto result = std::async(std::launch::async, [&] {
+    RpcClient c;
+    std::string error;
+    const bool ok = c.Connect(path, &error, 0.3);
+    return std::make_pair(ok, error);
+  });
+  const bool finished = result.wait_for(std::chrono::seconds(3)) == std::future_status::ready;
+  ::close(listener);  // unblocks an old-style blocking connect
+  for (int fd : queued) ::close(fd);
+  ASSERT_TRUE(finished) << "Connect blocked";
+  const auto r = result.get();
+  EXPECT_FALSE(r.first);
+  EXPECT_EQ(r.second, "cannot reach irslamd at " + path + ": timed out after 0.3 s (its backlog is full)");
 }
 
 TEST_F(ApiServerTest, SubscriberThatNeverReadsIsDroppedAndOthersKeepGoing) {
@@ -175,6 +524,7 @@ TEST_F(ApiServerTest, SubscriptionDeliversNotificationsAtTheRate) {
   }
   EXPECT_FALSE(c->Call("subscribe", {{"rate", -1}}, 5, &error));
   EXPECT_NE(error.find("rate must be > 0"), std::string::npos);
+  EXPECT_EQ(server_->stats().errors, 1u);
 }
 
 TEST_F(ApiServerTest, IdleClientsAreClosed) {

@@ -47,5 +47,31 @@ TEST(JsonRpcTest, ErrorKeepsTheIdWhenItIsKnown) {
   EXPECT_EQ(std::get<nlohmann::json>(ParseRequest("{"))["id"], nullptr);
 }
 
+TEST(JsonRpcTest, MessageTextNeverThrowsOnInvalidUtf8) {
+  // Strict dump() threw type_error 316 here (SIGABRT in the daemon).
+  const auto parsed = ParseRequest("{\"jsonrpc\":\"2.0\",\"id\":1,\"method\":\"\xff\"}");
+  const std::string text = MessageText(std::get<nlohmann::json>(parsed));
+  EXPECT_EQ(text.find('\xff'), std::string::npos);
+  EXPECT_NE(text.find("\xef\xbf\xbd"), std::string::npos) << text;
+  EXPECT_EQ(MessageText(MakeError(nullptr, kMethodNotFound, "method not found: \xc3")),
+            "{\"error\":{\"code\":-32601,\"message\":\"method not found: \xef\xbf\xbd\"},\"id\":null,"
+            "\"jsonrpc\":\"2.0\"}");
+}
+
+TEST(JsonRpcTest, ResultTextIsWhatMessageTextMakesOfTheResult) {
+  const nlohmann::json result = {{"state", "idle"}, {"pose", {1.5, -2, 0.25}}, {"s", "\xff"}};
+  for (const nlohmann::json& id : {nlohmann::json(7), nlohmann::json("abc"), nlohmann::json(nullptr)}) {
+    EXPECT_EQ(ResultText(id, MessageText(result)), MessageText(MakeResult(id, result)));
+  }
+}
+
+TEST(JsonRpcTest, EscapeForLogKeepsOneLineAndCapsTheLength) {
+  // A method name with a newline and a priority prefix forged log lines.
+  EXPECT_EQ(EscapeForLog("stop\n<0>irslamd: fake"), "stop\\x0a<0>irslamd: fake");
+  EXPECT_EQ(EscapeForLog("a\\b\x7f\xff\r"), "a\\x5cb\\x7f\\xff\\x0d");
+  EXPECT_EQ(EscapeForLog(std::string(100, 'x'), 8), "xxxxxxxx...");
+  EXPECT_EQ(EscapeForLog("status"), "status");
+}
+
 }  // namespace
 }  // namespace irslam::rpc
