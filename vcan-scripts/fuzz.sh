@@ -2,7 +2,7 @@
 # Fuzzes every parser irslamd and irslam-sim expose (libFuzzer, clang, with
 # AddressSanitizer + UndefinedBehaviorSanitizer): JSON-RPC request lines, CAN
 # frames (through the decoder, the controller client and the whole core), world
-# files and config files. Each runs SECONDS (default 60) from its committed seed
+# files, config files and the daemon's saved-map files. Each runs SECONDS (default 60) from its committed seed
 # corpus in tests/fuzz/corpus/<name>/; any crash fails (exit 1) and leaves its
 # input in build-fuzz/artifacts/.
 #   vcan-scripts/fuzz.sh [SECONDS] [TARGET...]
@@ -11,7 +11,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 seconds=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(jsonrpc can world config)
+[ ${#targets[@]} -gt 0 ] || targets=(jsonrpc can world config map)
 
 bash "$IRSLAM_ROOT/vcan-scripts/install-deps.sh" --fuzz
 build=$IRSLAM_ROOT/build-fuzz
