@@ -58,10 +58,6 @@ nlohmann::json MapService::Serve(const MapSource& live) const {
 SaveResult MapService::Save(const char* reason, const MapSource& live, bool final) {
   if (!live_ran_ && !held_) return last_result_ = SaveResult::kNothing;  // nothing new
   nlohmann::json map = live_ran_ ? live() : *held_;
-  if (LineCount(map) == 0 && stored_ && LineCount(stored_->map) > 0) {
-    pending_reason_.reset();
-    return last_result_ = SaveResult::kNothing;  // never an empty map over a map with lines
-  }
   if (stored_ && map == stored_->map) {
     ++unchanged_;
     pending_reason_.reset();

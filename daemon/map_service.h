@@ -7,9 +7,9 @@
 //
 // Saves (reason "model", "stop", "shutdown", "reload") write the same candidate,
 // and never:
-//   - when nothing ran (no mission since start): the saved map stays as it is;
-//   - a map without lines over a saved map with lines (a reload or a fresh start
-//     must never replace a finished map by an empty one);
+//   - when nothing ran (no mission since start, or since a reload replaced the
+//     core and its map was kept): the saved map stays as it is; a reload never
+//     makes an empty map the one served or saved;
 //   - a map identical to the last one saved ("unchanged": a `stop` storm writes
 //     the SD card once);
 //   - more often than once per min_interval_s, except the final save at shutdown:

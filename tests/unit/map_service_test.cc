@@ -84,11 +84,13 @@ TEST_F(MapServiceTest, AReplacedCoresFinishedMapIsKeptServedAndNeverOverwrittenB
   ASSERT_TRUE(OnDisk());
   EXPECT_EQ(OnDisk()->map["lines"].size(), 5u);
   EXPECT_EQ(OnDisk()->seq, 1u);
-  // A fresh mission stopped before it found a line does not replace it either.
+  // A mission on the new core: its map is served and saved from then on.
   maps->OnMissionStarted();
+  live_ = MapWithLines(1);
+  EXPECT_EQ(maps->Serve(live())["lines"].size(), 1u);
   Advance(60);
-  EXPECT_EQ(maps->Save("stop", live()), SaveResult::kNothing);
-  EXPECT_EQ(OnDisk()->map["lines"].size(), 5u);
+  EXPECT_EQ(maps->Save("stop", live()), SaveResult::kSaved);
+  EXPECT_EQ(OnDisk()->map["lines"].size(), 1u);
 }
 
 TEST_F(MapServiceTest, AnUnsavedMapOfAReplacedCoreIsSavedThen) {
