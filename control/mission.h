@@ -13,7 +13,8 @@
 #include "control/room_model.h"
 #include "control/wall_follower.h"
 #include "slam/slam.h"
-#include "slam/types.h"
+#include "types/geometry.h"
+#include "types/signals.h"
 
 namespace irslam::control {
 
@@ -112,8 +113,8 @@ class Mission {
 
   MissionOptions options_;
   ExploreOptions explore_;
-  slam::RobotGeometry geometry_;
-  std::array<slam::SensorMount, kNumIrSensors> mounts_;
+  RobotGeometry geometry_;
+  std::array<SensorMount, kNumIrSensors> mounts_;
   double follow_distance_m_;
   WallFollower follower_;
   Modeler modeler_;

@@ -87,7 +87,7 @@ int EnvironmentModel::pending() const {
 
 bool Modeler::CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& loop,
                              const std::vector<slam::LineFeature>& lines,
-                             const std::vector<slam::TrajectoryPoint>& trajectory) {
+                             const std::vector<TimedPose>& trajectory) {
   // Remembered either way: a third side found later still closes it.
   closed_by_contour_.push_back(object_id);
   if (loop.size() >= 3) contour_loops_.push_back(loop);
@@ -127,7 +127,7 @@ void Modeler::GiveUp(int object_id, const std::string& why) {
 }
 
 const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& lines,
-                                        const std::vector<slam::TrajectoryPoint>& trajectory) {
+                                        const std::vector<TimedPose>& trajectory) {
   const auto& o = options_;
   std::vector<Side> sides;
   for (const auto& l : lines) {

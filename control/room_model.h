@@ -66,7 +66,7 @@ class Modeler {
   // Builds the model from map-frame lines; `trajectory` (map frame) tells from
   // which side each line was seen. Object ids persist across calls.
   const EnvironmentModel& Update(const std::vector<slam::LineFeature>& lines,
-                                 const std::vector<slam::TrajectoryPoint>& trajectory);
+                                 const std::vector<TimedPose>& trajectory);
   // The robot has followed the object's contour all round, along `loop` (map
   // frame): every mapped side inside the loop belongs to this one object (the
   // pieces of compound furniture, and sides whose ends were seen short of their
@@ -75,7 +75,7 @@ class Modeler {
   // (noted). False if fewer sides are known.
   bool CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& loop,
                       const std::vector<slam::LineFeature>& lines,
-                      const std::vector<slam::TrajectoryPoint>& trajectory);
+                      const std::vector<TimedPose>& trajectory);
   // Marks an object as not completable (e.g. unreachable); it stays incomplete.
   void GiveUp(int object_id, const std::string& why);
   const EnvironmentModel& model() const { return model_; }

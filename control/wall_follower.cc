@@ -17,7 +17,7 @@ struct Point {
   double x, y;
 };
 
-Point Hit(const slam::SensorMount& m, double r) {
+Point Hit(const SensorMount& m, double r) {
   return {m.x + r * std::cos(m.theta), m.y + r * std::sin(m.theta)};
 }
 
@@ -37,7 +37,7 @@ const char* ToString(FollowMode m) {
 }
 
 WallFollower::WallFollower(WallFollowerOptions options,
-                           const std::array<slam::SensorMount, kNumIrSensors>& mounts,
+                           const std::array<SensorMount, kNumIrSensors>& mounts,
                            double robot_radius_m)
     : options_(options), mounts_(mounts), robot_radius_m_(robot_radius_m) {}
 

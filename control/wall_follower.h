@@ -9,7 +9,8 @@
 #include <optional>
 
 #include "slam/slam.h"
-#include "slam/types.h"
+#include "types/geometry.h"
+#include "types/signals.h"
 
 namespace irslam::control {
 
@@ -49,7 +50,7 @@ struct WallEstimate {
 
 class WallFollower {
  public:
-  WallFollower(WallFollowerOptions options, const std::array<slam::SensorMount, kNumIrSensors>& mounts,
+  WallFollower(WallFollowerOptions options, const std::array<SensorMount, kNumIrSensors>& mounts,
                double robot_radius_m);
 
   // One control step at robot time t with the latest scan; bumped: a bumper is pressed.
@@ -78,7 +79,7 @@ class WallFollower {
   void Enter(FollowMode m, double t);
 
   WallFollowerOptions options_;
-  std::array<slam::SensorMount, kNumIrSensors> mounts_;
+  std::array<SensorMount, kNumIrSensors> mounts_;
   double robot_radius_m_;
   FollowMode mode_ = FollowMode::kFind;
   double mode_since_ = 0;

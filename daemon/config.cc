@@ -93,7 +93,7 @@ class Section {
   std::set<std::string> used_;
 };
 
-void ReadRobot(const json& j, control::CoreOptions* o, std::string* e) {
+void ReadRobot(const json& j, robot::CoreOptions* o, std::string* e) {
   Section s(j, "robot", e);
   auto& g = o->slam.geometry;
   s.Num("wheel_base_m", &g.wheel_base_m, 0.05, 2.0);
@@ -104,7 +104,7 @@ void ReadRobot(const json& j, control::CoreOptions* o, std::string* e) {
   s.Finish();
 }
 
-void ReadSensors(const json& j, control::CoreOptions* o, std::string* e) {
+void ReadSensors(const json& j, robot::CoreOptions* o, std::string* e) {
   Section s(j, "sensors", e);
   if (const json* m = s.Array("mounts")) {
     if (m->size() != kNumIrSensors) {
@@ -148,7 +148,7 @@ void ReadSensors(const json& j, control::CoreOptions* o, std::string* e) {
   }
 }
 
-void ReadController(const json& j, control::CoreOptions* o, std::string* e) {
+void ReadController(const json& j, robot::CoreOptions* o, std::string* e) {
   Section s(j, "controller", e);
   s.Num("timeout_s", &o->motor.timeout_s, 0.005, 10);
   s.Num("heartbeat_period_s", &o->heartbeat_period_s, 0.01, 10);
@@ -156,13 +156,13 @@ void ReadController(const json& j, control::CoreOptions* o, std::string* e) {
   s.Finish();
 }
 
-void ReadControl(const json& j, control::CoreOptions* o, std::string* e) {
+void ReadControl(const json& j, robot::CoreOptions* o, std::string* e) {
   Section s(j, "control", e);
   s.Num("period_s", &o->period_s, 0.001, 1.0);
   s.Finish();
 }
 
-void ReadWallFollow(const json& j, control::CoreOptions* o, std::string* e) {
+void ReadWallFollow(const json& j, robot::CoreOptions* o, std::string* e) {
   Section s(j, "wall_follow", e);
   auto& w = o->wall;
   s.Num("follow_distance_m", &w.follow_distance_m, 0.1, 2.0);
@@ -187,7 +187,7 @@ void ReadBool(const json& j, const char* key, bool* out, Section* s) {
   *out = j.at(key).get<bool>();
 }
 
-void ReadMission(const json& j, control::CoreOptions* o, std::string* e) {
+void ReadMission(const json& j, robot::CoreOptions* o, std::string* e) {
   Section s(j, "mission", e);
   auto& m = o->mission;
   s.Num("max_time_s", &m.max_time_s, 1, 1e6);
@@ -209,7 +209,7 @@ void ReadString(const json& j, const char* key, std::string* out, Section* s) {
   *out = j.at(key).get<std::string>();
 }
 
-void ReadApi(const json& j, control::CoreOptions* o, std::string* e) {
+void ReadApi(const json& j, robot::CoreOptions* o, std::string* e) {
   Section s(j, "api", e);
   auto& a = o->api;
   for (const auto& [key, out] : {std::pair<const char*, std::string*>{"socket_group", &a.socket_group},
@@ -248,7 +248,7 @@ void ReadGpioLine(const char* key, drivers::GpioLineSpec* out, Section* parent, 
   s.Finish();
 }
 
-void ReadState(const json& j, control::CoreOptions* o, std::string* e) {
+void ReadState(const json& j, robot::CoreOptions* o, std::string* e) {
   Section s(j, "state", e);
   ReadString(j, "dir", &o->state_dir, &s);
   s.Num("dir", nullptr, 0, 0);
@@ -256,7 +256,7 @@ void ReadState(const json& j, control::CoreOptions* o, std::string* e) {
   s.Finish();
 }
 
-void ReadGpio(const json& j, control::CoreOptions* o, std::string* e) {
+void ReadGpio(const json& j, robot::CoreOptions* o, std::string* e) {
   Section s(j, "gpio", e);
   auto& g = o->gpio;
   ReadGpioLine("estop", &g.estop, &s, e);
@@ -268,7 +268,7 @@ void ReadGpio(const json& j, control::CoreOptions* o, std::string* e) {
   s.Finish();
 }
 
-void ReadExploration(const json& j, control::CoreOptions* o, std::string* e) {
+void ReadExploration(const json& j, robot::CoreOptions* o, std::string* e) {
   Section s(j, "exploration", e);
   auto& x = o->explore;
   s.Num("clearance_m", &x.clearance_m, 0, 1);
@@ -292,7 +292,7 @@ void ReadExploration(const json& j, control::CoreOptions* o, std::string* e) {
   s.Finish();
 }
 
-void ReadModel(const json& j, control::CoreOptions* o, std::string* e) {
+void ReadModel(const json& j, robot::CoreOptions* o, std::string* e) {
   Section s(j, "model", e);
   auto& m = o->model;
   s.Num("axis_tolerance_rad", &m.axis_tolerance_rad, 0.001, 0.7);
@@ -304,7 +304,7 @@ void ReadModel(const json& j, control::CoreOptions* o, std::string* e) {
 }
 
 
-void ReadSlam(const json& j, control::CoreOptions* o, std::string* e) {
+void ReadSlam(const json& j, robot::CoreOptions* o, std::string* e) {
   Section s(j, "slam", e);
   s.Num("trajectory_period_s", &o->slam.trajectory_period_s, 0.01, 0.5);
   s.Num("var_per_m", &o->slam.motion_noise.var_per_m, 0, 1);
@@ -371,7 +371,7 @@ void ReadSlam(const json& j, control::CoreOptions* o, std::string* e) {
 
 }  // namespace
 
-bool ParseConfig(std::string_view text, control::CoreOptions* options, std::string* error) {
+bool ParseConfig(std::string_view text, robot::CoreOptions* options, std::string* error) {
   error->clear();
   const std::optional<json> parsed = ParseJsonText(text, error);
   if (!parsed) {
@@ -379,7 +379,7 @@ bool ParseConfig(std::string_view text, control::CoreOptions* options, std::stri
     return false;
   }
   const json& j = *parsed;
-  control::CoreOptions o = *options;
+  robot::CoreOptions o = *options;
   Section top(j, "", error);
   static const json kEmpty = json::object();
   const auto sub = [&](const char* k) {
@@ -404,7 +404,7 @@ bool ParseConfig(std::string_view text, control::CoreOptions* options, std::stri
   return true;
 }
 
-bool LoadConfigFile(const std::string& path, control::CoreOptions* options, std::string* error) {
+bool LoadConfigFile(const std::string& path, robot::CoreOptions* options, std::string* error) {
   std::string text;
   if (!ReadRegularFile(path, kMaxConfigBytes, &text, error)) {
     *error = "config: " + *error;
@@ -417,7 +417,7 @@ bool LoadConfigFile(const std::string& path, control::CoreOptions* options, std:
   return true;
 }
 
-std::string DumpConfig(const control::CoreOptions& o) {
+std::string DumpConfig(const robot::CoreOptions& o) {
   json mounts = json::array();
   for (const auto& m : o.slam.mounts) mounts.push_back({m.x, m.y, m.theta});
   json table = json::array();

@@ -7,17 +7,17 @@
 #include <string>
 #include <string_view>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 
 namespace irslam {
 
 // Parses config text over the defaults. On error returns false and sets *error to
 // one line naming the key or the position of the problem.
-bool ParseConfig(std::string_view text, control::CoreOptions* options, std::string* error);
+bool ParseConfig(std::string_view text, robot::CoreOptions* options, std::string* error);
 // Reads and parses a file ("config: cannot read FILE: ..." on I/O errors).
-bool LoadConfigFile(const std::string& path, control::CoreOptions* options, std::string* error);
+bool LoadConfigFile(const std::string& path, robot::CoreOptions* options, std::string* error);
 // The effective configuration as JSON (what `irslamd --print-config` shows).
-std::string DumpConfig(const control::CoreOptions& options);
+std::string DumpConfig(const robot::CoreOptions& options);
 
 }  // namespace irslam
 

@@ -11,7 +11,7 @@
 namespace irslam {
 
 namespace {
-int64_t PeriodNs(const control::CoreOptions& core, double time_scale) {
+int64_t PeriodNs(const robot::CoreOptions& core, double time_scale) {
   return static_cast<int64_t>(core.period_s / time_scale * 1e9);
 }
 }  // namespace
@@ -20,13 +20,13 @@ int64_t Daemon::Ns(WallTime t) {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
 }
 
-Daemon::Daemon(boost::asio::io_context& io, DaemonOptions options, control::CoreOptions core, WallClock clock)
+Daemon::Daemon(boost::asio::io_context& io, DaemonOptions options, robot::CoreOptions core, WallClock clock)
     : io_(io),
       options_(std::move(options)),
       core_options_(core),
       clock_(std::move(clock)),
       start_(clock_()),
-      core_(std::make_unique<control::RobotCore>(core)),
+      core_(std::make_unique<robot::RobotCore>(core)),
       timer_(io),
       signals_(io, SIGINT, SIGTERM, SIGHUP),
       scheduler_(PeriodNs(core, options_.time_scale), Ns(start_)),
@@ -91,7 +91,7 @@ void Daemon::OnFrame(const can_frame& f) {
 
 void Daemon::OnGpioInput(drivers::Gpio::Input input, bool active) {
   using In = drivers::Gpio::Input;
-  using Safety = control::RobotCore::SafetyInput;
+  using Safety = robot::RobotCore::SafetyInput;
   const double now = RobotNow();
   const bool was_latched = core_->estop_latched();
   core_->OnSafetyInput(input == In::kEstop        ? Safety::kEstop
@@ -203,7 +203,7 @@ void Daemon::Reload() {
     std::fprintf(stderr, "<5>irslamd: SIGHUP: no --config file, nothing to reload\n");
     return;
   }
-  control::CoreOptions fresh = control::DefaultCoreOptions();
+  robot::CoreOptions fresh = robot::DefaultCoreOptions();
   std::string error;
   if (!LoadConfigFile(options_.config_path, &fresh, &error)) {
     std::fprintf(stderr, "<3>irslamd: reload failed, keeping the running config: %s\n", error.c_str());
@@ -229,7 +229,7 @@ void Daemon::ApplyPendingOptions() {
   std::fprintf(stderr, "<5>irslamd: config from %s applied\n", options_.config_path.c_str());
 }
 
-void Daemon::ApplyOptions(control::CoreOptions fresh) {
+void Daemon::ApplyOptions(robot::CoreOptions fresh) {
   if (!fresh.gpio.SameLines(core_options_.gpio)) {
     std::fprintf(stderr, "<4>irslamd: [gpio] lines are opened at start: the change applies after a restart\n");
     const double debounce_s = fresh.gpio.debounce_s;  // this applies at once
@@ -238,7 +238,7 @@ void Daemon::ApplyOptions(control::CoreOptions fresh) {
   }
   maps_.OnCoreReplaced(LiveMap());  // the old core's map is kept (and saved if it was not)
   core_options_ = fresh;
-  core_ = std::make_unique<control::RobotCore>(fresh);
+  core_ = std::make_unique<robot::RobotCore>(fresh);
   if (foreign_.Present(WallNow())) core_->LatchFault(RobotNow(), kForeignCommanderReason);
   if (gpio_) gpio_->Replay();  // the new core learns the inputs' present levels
   scheduler_ = PeriodScheduler(PeriodNs(fresh, options_.time_scale), Ns(clock_()));

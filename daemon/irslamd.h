@@ -16,7 +16,7 @@
 #include <optional>
 #include <string>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 #include "daemon/access.h"
 #include "daemon/api_server.h"
 #include "daemon/foreign_commander.h"
@@ -45,7 +45,7 @@ struct DaemonOptions {
 
 class Daemon : public ApiServer::Dispatcher {
  public:
-  Daemon(boost::asio::io_context& io, DaemonOptions options, control::CoreOptions core,
+  Daemon(boost::asio::io_context& io, DaemonOptions options, robot::CoreOptions core,
          WallClock clock = SystemWallClock());
   ~Daemon() override;
   Daemon(const Daemon&) = delete;
@@ -72,7 +72,7 @@ class Daemon : public ApiServer::Dispatcher {
 
   nlohmann::json StatusJson();
   const RpcMethodTable& methods() const { return methods_; }
-  const control::CoreOptions& core_options() const { return core_options_; }
+  const robot::CoreOptions& core_options() const { return core_options_; }
   const MapService& maps() const { return maps_; }
 
  private:
@@ -89,7 +89,7 @@ class Daemon : public ApiServer::Dispatcher {
   void OnFrame(const can_frame& f);
   void OnStateChange(double now);
   // A new core with these options; the map service keeps the old core's map.
-  void ApplyOptions(control::CoreOptions fresh);
+  void ApplyOptions(robot::CoreOptions fresh);
   void ApplyPendingOptions();
   void OnGpioInput(drivers::Gpio::Input input, bool active);
   // Drives the GPIO outputs (motor enable, LED) from the core's state.
@@ -98,11 +98,11 @@ class Daemon : public ApiServer::Dispatcher {
 
   boost::asio::io_context& io_;
   DaemonOptions options_;
-  control::CoreOptions core_options_;
-  std::optional<control::CoreOptions> pending_options_;
+  robot::CoreOptions core_options_;
+  std::optional<robot::CoreOptions> pending_options_;
   WallClock clock_;
   WallTime start_;
-  std::unique_ptr<control::RobotCore> core_;
+  std::unique_ptr<robot::RobotCore> core_;
   std::unique_ptr<drivers::CanBus> bus_;
   std::unique_ptr<ApiServer> api_;
   std::unique_ptr<drivers::Gpio> gpio_;

@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-  irslam::control::CoreOptions core = irslam::control::DefaultCoreOptions();
+  irslam::robot::CoreOptions core = irslam::robot::DefaultCoreOptions();
   std::string error;
   if (!options.config_path.empty() && !irslam::LoadConfigFile(options.config_path, &core, &error)) {
     std::fprintf(stderr, "irslamd: %s\n", error.c_str());

@@ -211,7 +211,7 @@ MotorClient::Event MotorClient::Handle(const can_frame& frame, double now_s) {
 }
 
 can_frame MotorClient::MakeCommand(const WheelCommand& cmd) {
-  proto::WheelCommand m;
+  proto::WheelCmd m;
   m.left_mps = cmd.enable ? cmd.left_mps : 0.0;
   m.right_mps = cmd.enable ? cmd.right_mps : 0.0;
   m.enable = cmd.enable;

@@ -12,7 +12,8 @@
 #include <optional>
 
 #include "proto/codec.h"
-#include "slam/types.h"
+#include "types/geometry.h"
+#include "types/signals.h"
 
 namespace irslam::drivers {
 

@@ -143,7 +143,7 @@ std::string_view ToString(DecodeError e) {
 
 can_frame Encode(const Message& m) {
   struct Visitor {
-    can_frame operator()(const WheelCommand& c) const {
+    can_frame operator()(const WheelCmd& c) const {
       return Writer(Spec(kWheelCmdId))
           .Phys(0, c.left_mps).Phys(1, c.right_mps).Raw(2, c.enable ? 1 : 0).Raw(3, c.seq)
           .frame();
@@ -204,7 +204,7 @@ DecodeResult Decode(const can_frame& f) {
   const auto u16 = [&](size_t i) { return static_cast<uint16_t>(Raw(f, i)); };
   switch (spec->id) {
     case kWheelCmdId:
-      r.message = WheelCommand{GetPhysical(f.data, spec->signals[0]),
+      r.message = WheelCmd{GetPhysical(f.data, spec->signals[0]),
                                GetPhysical(f.data, spec->signals[1]), Raw(f, 2) != 0, u8(3)};
       break;
     case kDaemonHeartbeatId:

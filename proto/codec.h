@@ -15,6 +15,8 @@
 #include <string_view>
 #include <variant>
 
+#include "types/signals.h"
+
 namespace irslam::proto {
 
 inline constexpr uint32_t kWheelCmdId = 0x080;
@@ -23,7 +25,6 @@ inline constexpr uint32_t kControllerStatusId = 0x100;
 inline constexpr uint32_t kEncoderId = 0x110;
 inline constexpr uint32_t kIrAId = 0x120;
 inline constexpr uint32_t kIrBId = 0x121;
-inline constexpr int kNumIrSensors = 7;
 
 // Fault bits of CTRL_STATUS.Faults.
 inline constexpr uint8_t kFaultCommandTimeout = 1 << 0;
@@ -32,9 +33,7 @@ inline constexpr uint8_t kFaultEncoder = 1 << 2;
 inline constexpr uint8_t kFaultIr = 1 << 3;
 inline constexpr uint8_t kFaultLowBattery = 1 << 4;
 inline constexpr uint8_t kFaultEmergencyStop = 1 << 5;
-// Bumper bits of CTRL_STATUS.Bumpers.
-inline constexpr uint8_t kBumperLeft = 1 << 0;
-inline constexpr uint8_t kBumperRight = 1 << 1;
+// Bumper bits of CTRL_STATUS.Bumpers: kBumperLeft, kBumperRight (types/robot.h).
 
 enum class ControllerState : uint8_t { kBoot = 0, kReady = 1, kDriving = 2, kFault = 3 };
 
@@ -65,10 +64,8 @@ void SetRaw(uint8_t* data, const SignalSpec& s, uint64_t raw);
 // Physical value (raw * scale + offset, sign-extended for signed signals).
 double GetPhysical(const uint8_t* data, const SignalSpec& s);
 
-struct WheelCommand {
-  double left_mps = 0;
-  double right_mps = 0;
-  bool enable = false;
+// WHEEL_CMD: the command (types/signals.h) and its sequence counter.
+struct WheelCmd : WheelCommand {
   uint8_t seq = 0;
 };
 struct DaemonHeartbeat {
@@ -100,7 +97,7 @@ struct IrB {
 };
 
 using Message =
-    std::variant<WheelCommand, DaemonHeartbeat, ControllerStatus, EncoderCounts, IrA, IrB>;
+    std::variant<WheelCmd, DaemonHeartbeat, ControllerStatus, EncoderCounts, IrA, IrB>;
 
 enum class DecodeError {
   kNone = 0,

@@ -11,7 +11,7 @@
 #include <memory>
 #include <sstream>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 #include "daemon/config.h"
 #include "daemon/map_svg.h"
 #include "drivers/can_bus.h"
@@ -53,14 +53,14 @@ struct Common {
   std::string faults;  // --faults SPEC (sim/faults.h, docs/reliability.md)
 };
 
-bool Load(const Common& c, World* world, control::CoreOptions* core, uint64_t* seed) {
+bool Load(const Common& c, World* world, robot::CoreOptions* core, uint64_t* seed) {
   std::string error;
   auto w = LoadWorldFile(c.world_path, &error);
   if (!w) {
     std::fprintf(stderr, "irslam-sim: %s\n", error.c_str());
     return false;
   }
-  *core = control::DefaultCoreOptions();
+  *core = robot::DefaultCoreOptions();
   if (!c.config_path.empty() && !LoadConfigFile(c.config_path, core, &error)) {
     std::fprintf(stderr, "irslam-sim: %s\n", error.c_str());
     return false;
@@ -90,7 +90,7 @@ nlohmann::json FaultsJson(const FaultCounters& f) {
 int Run(const Common& c, double max_time, const std::string& map_out, const std::string& svg_out,
         const std::string& lines_out, const std::string& events_out) {
   World world;
-  control::CoreOptions core_opts;
+  robot::CoreOptions core_opts;
   uint64_t seed;
   FaultSpec faults;
   if (!Load(c, &world, &core_opts, &seed) || !LoadFaults(c, &faults)) return kExitUsage;
@@ -145,7 +145,7 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
     return 1;
   }
   const SimController& sim = *run.sim;
-  const control::RobotCore& core = *run.core;
+  const robot::RobotCore& core = *run.core;
   const double t = run.t;
   if (!WriteJson(map_out, core.Map())) {
     std::fprintf(stderr, "irslam-sim: cannot write %s\n", map_out.c_str());
@@ -188,7 +188,7 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
 
 int Serve(const Common& c, const std::string& iface, double time_scale) {
   World world;
-  control::CoreOptions core_opts;
+  robot::CoreOptions core_opts;
   uint64_t seed;
   FaultSpec faults;
   if (!Load(c, &world, &core_opts, &seed) || !LoadFaults(c, &faults)) return kExitUsage;

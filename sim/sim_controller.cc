@@ -21,7 +21,7 @@ SimController::SimController(World world, SimOptions options, uint64_t seed)
 void SimController::HandleFrame(const can_frame& frame) {
   const proto::DecodeResult r = proto::Decode(frame);
   if (!r.ok()) return;
-  if (const auto* c = std::get_if<proto::WheelCommand>(&r.message)) {
+  if (const auto* c = std::get_if<proto::WheelCmd>(&r.message)) {
     const double vmax = options_.geometry.max_wheel_speed_mps;
     enabled_ = c->enable;
     target_l_ = c->enable ? std::clamp(c->left_mps, -vmax, vmax) : 0.0;
@@ -46,8 +46,8 @@ double SimController::Clearance(const Pose2& p, uint8_t* bumpers) const {
     *bumpers = 0;
     if (best < options_.geometry.radius_m + 0.003) {
       const double a = NormalizeAngle(std::atan2(contact.y - p.y, contact.x - p.x) - p.theta);
-      if (a > -0.35) *bumpers |= proto::kBumperLeft;
-      if (a < 0.35) *bumpers |= proto::kBumperRight;
+      if (a > -0.35) *bumpers |= kBumperLeft;
+      if (a < 0.35) *bumpers |= kBumperRight;
     }
   }
   return best;
@@ -86,7 +86,7 @@ void SimController::PhysicsStep(double dt) {
     blocked_ = true;
     in_contact_ = true;
     Clearance(pose_, &bump);
-    bumpers_ = bump ? bump : static_cast<uint8_t>(proto::kBumperLeft | proto::kBumperRight);
+    bumpers_ = bump ? bump : static_cast<uint8_t>(kBumperLeft | kBumperRight);
     vl_ = vr_ = 0;
     return;
   }

@@ -21,8 +21,8 @@
 namespace irslam::sim {
 
 struct SimOptions {
-  slam::RobotGeometry geometry;
-  std::array<slam::SensorMount, kNumIrSensors> mounts{};
+  RobotGeometry geometry;
+  std::array<SensorMount, kNumIrSensors> mounts{};
   drivers::IrCalibrationOptions ir;
   double physics_dt_s = 0.002;
   double encoder_period_s = 0.010;

@@ -2,7 +2,7 @@
 
 namespace irslam::sim {
 
-SimOptions SimOptionsFrom(const control::CoreOptions& core) {
+SimOptions SimOptionsFrom(const robot::CoreOptions& core) {
   SimOptions o;
   o.geometry = core.slam.geometry;
   o.mounts = core.slam.mounts;
@@ -10,13 +10,13 @@ SimOptions SimOptionsFrom(const control::CoreOptions& core) {
   return o;
 }
 
-InProcessRun RunInProcess(const World& world, const control::CoreOptions& options, uint64_t seed,
+InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options, uint64_t seed,
                           double max_time_s,
                           const std::function<void(const InProcessRun&)>& on_tick,
                           const FaultSpec* faults) {
   InProcessRun run;
   run.sim = std::make_unique<SimController>(world, SimOptionsFrom(options), seed);
-  run.core = std::make_unique<control::RobotCore>(options);
+  run.core = std::make_unique<robot::RobotCore>(options);
   if (faults) run.faults = std::make_unique<FaultInjector>(*faults, seed);
   // Frames are exchanged every 2 ms of robot time; the core ticks at its period.
   const double io_dt = 0.002;

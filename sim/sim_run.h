@@ -7,17 +7,17 @@
 #include <memory>
 #include <string>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 #include "sim/faults.h"
 #include "sim/sim_controller.h"
 
 namespace irslam::sim {
 
-SimOptions SimOptionsFrom(const control::CoreOptions& core);
+SimOptions SimOptionsFrom(const robot::CoreOptions& core);
 
 struct InProcessRun {
   std::unique_ptr<SimController> sim;
-  std::unique_ptr<control::RobotCore> core;
+  std::unique_ptr<robot::RobotCore> core;
   std::unique_ptr<FaultInjector> faults;  // when faults were injected
   double t = 0;
   std::string error;  // set when the mission could not start
@@ -25,7 +25,7 @@ struct InProcessRun {
 
 // Runs until the mission is done or idle again, or max_time_s of robot time.
 // on_tick (optional) is called after every control period.
-InProcessRun RunInProcess(const World& world, const control::CoreOptions& options, uint64_t seed,
+InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options, uint64_t seed,
                           double max_time_s,
                           const std::function<void(const InProcessRun&)>& on_tick = nullptr,
                           const FaultSpec* faults = nullptr);

@@ -8,7 +8,8 @@
 #include <string_view>
 #include <vector>
 
-#include "slam/types.h"
+#include "types/geometry.h"
+#include "types/signals.h"
 
 namespace irslam::sim {
 

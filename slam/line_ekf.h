@@ -9,7 +9,8 @@
 #include <Eigen/Core>
 
 #include "slam/odometry.h"
-#include "slam/types.h"
+#include "types/geometry.h"
+#include "types/signals.h"
 
 namespace irslam::slam {
 

@@ -5,7 +5,8 @@
 #include <cmath>
 #include <numeric>
 
-#include "slam/types.h"
+#include "types/geometry.h"
+#include "types/signals.h"
 
 namespace irslam::slam {
 namespace {

@@ -7,19 +7,11 @@
 #include <Eigen/Core>
 #include <optional>
 
-#include "slam/types.h"
+#include "types/geometry.h"
+#include "types/robot.h"
+#include "types/signals.h"
 
 namespace irslam::slam {
-
-struct RobotGeometry {
-  double wheel_base_m = 0.25;      // distance between the wheels' contact points
-  double wheel_radius_m = 0.035;
-  double counts_per_rev = 2048;    // encoder counts per wheel revolution
-  double radius_m = 0.17;          // robot body radius (round robot)
-  double max_wheel_speed_mps = 0.5;
-
-  double metres_per_count() const { return 2.0 * M_PI * wheel_radius_m / counts_per_rev; }
-};
 
 struct MotionNoise {
   double var_per_m = 4e-4;          // m^2 of position variance per metre travelled

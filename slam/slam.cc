@@ -8,14 +8,13 @@ namespace irslam::slam {
 namespace {
 
 Eigen::Vector2d Transform(const Pose2& p, const Eigen::Vector2d& v) {
-  const double c = std::cos(p.theta), s = std::sin(p.theta);
-  return {p.x + c * v.x() - s * v.y(), p.y + s * v.x() + c * v.y()};
+  const auto [x, y] = ToParent(p, v.x(), v.y());
+  return {x, y};
 }
 
 Eigen::Vector2d InverseTransform(const Pose2& p, const Eigen::Vector2d& v) {
-  const double c = std::cos(p.theta), s = std::sin(p.theta);
-  const double dx = v.x() - p.x, dy = v.y() - p.y;
-  return {c * dx + s * dy, -s * dx + c * dy};
+  const auto [x, y] = ToLocal(p, v.x(), v.y());
+  return {x, y};
 }
 
 Eigen::Vector2d Direction(double theta) { return {-std::sin(theta), std::cos(theta)}; }
@@ -53,8 +52,8 @@ std::vector<LineFeature> Slam::map_lines() const {
   return out;
 }
 
-std::vector<TrajectoryPoint> Slam::map_trajectory() const {
-  std::vector<TrajectoryPoint> out = trajectory_;
+std::vector<TimedPose> Slam::map_trajectory() const {
+  std::vector<TimedPose> out = trajectory_;
   for (auto& p : out) p.pose = ToMap(p.pose);
   return out;
 }

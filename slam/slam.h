@@ -27,16 +27,10 @@
 #include "slam/line_ekf.h"
 #include "slam/line_extraction.h"
 #include "slam/odometry.h"
-#include "slam/types.h"
+#include "types/geometry.h"
+#include "types/signals.h"
 
 namespace irslam::slam {
-
-// Where an IR sensor sits on the robot (robot frame: x forward, y left).
-struct SensorMount {
-  double x = 0;
-  double y = 0;
-  double theta = 0;
-};
 
 struct PdsOptions {
   double min_step_m = 0.01;     // a scan joins the PDS after this much motion ...
@@ -87,11 +81,6 @@ struct LineFeature {
   double length() const { return (p1 - p0).norm(); }
 };
 
-struct TrajectoryPoint {
-  double t = 0;
-  Pose2 pose;
-};
-
 struct SlamStats {
   int windows = 0;
   int lines_extracted = 0;
@@ -118,13 +107,13 @@ class Slam {
   Pose2 map_pose() const { return ToMap(ekf_.pose()); }
   Eigen::Matrix3d map_pose_cov() const;
   std::vector<LineFeature> map_lines() const;
-  std::vector<TrajectoryPoint> map_trajectory() const;
+  std::vector<TimedPose> map_trajectory() const;
   Pose2 ToMap(const Pose2& p) const;
   // Internal -> map frame rotation (pi/2 - theta_1; 0 before the first line).
   double map_rotation() const;
 
   const std::vector<LineFeature>& lines() const { return lines_; }  // internal frame
-  const std::vector<TrajectoryPoint>& trajectory() const { return trajectory_; }  // internal
+  const std::vector<TimedPose>& trajectory() const { return trajectory_; }  // internal
   size_t num_lines() const { return lines_.size(); }
   const LineEkf& ekf() const { return ekf_; }
   const Pose2& odometry_pose() const { return odometry_.pose(); }
@@ -160,7 +149,7 @@ class Slam {
   Odometry odometry_;
   LineEkf ekf_;
   std::vector<LineFeature> lines_;  // lines_[i] is state line i
-  std::vector<TrajectoryPoint> trajectory_;
+  std::vector<TimedPose> trajectory_;
   SlamStats stats_;
   std::vector<ExtractedLine> last_window_lines_;
   int next_id_ = 1;

@@ -4,7 +4,7 @@
 #include <chrono>
 #include <random>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 #include "slam/line_ekf.h"
 #include "slam/line_extraction.h"
 #include "slam/slam.h"
@@ -121,7 +121,7 @@ void BM_MissionFig14(benchmark::State& state) {
   double robot_s = 0, wall_s = 0;
   for (auto _ : state) {
     const auto t0 = std::chrono::steady_clock::now();
-    auto run = sim::RunInProcess(*world, control::DefaultCoreOptions(), 1, 600);
+    auto run = sim::RunInProcess(*world, robot::DefaultCoreOptions(), 1, 600);
     wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     robot_s += run.t;
     benchmark::DoNotOptimize(run);

@@ -7,11 +7,11 @@
 #include <cstdint>
 #include <cstring>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 #include "proto/codec.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  irslam::control::RobotCore core(irslam::control::DefaultCoreOptions());
+  irslam::robot::RobotCore core(irslam::robot::DefaultCoreOptions());
   double t = 0;
   bool started = false;
   for (size_t off = 0; off + sizeof(can_frame) <= size; off += sizeof(can_frame)) {

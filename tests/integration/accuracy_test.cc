@@ -2,7 +2,7 @@
 // tabulated in docs/accuracy.md by irslam-report).
 #include <gtest/gtest.h>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 #include "sim/sim_run.h"
 #include "tests/testing/worlds.h"
 #include "tests/tools/metrics.h"
@@ -12,8 +12,8 @@ namespace {
 
 sim::World Load(const std::string& name) { return testing::LoadTestWorld(name); }
 
-std::vector<metrics::TimedPose> Truth(const nlohmann::json& arr) {
-  std::vector<metrics::TimedPose> out;
+std::vector<TimedPose> Truth(const nlohmann::json& arr) {
+  std::vector<TimedPose> out;
   for (const auto& p : arr) out.push_back({p[0], {p[1], p[2], p[3]}});
   return out;
 }
@@ -22,7 +22,7 @@ class Fig14AccuracyTest : public ::testing::TestWithParam<uint64_t> {};
 
 TEST_P(Fig14AccuracyTest, OneLoopMeetsThePoseAndWallTargets) {
   const sim::World world = Load("fig14");
-  control::CoreOptions o = control::DefaultCoreOptions();
+  robot::CoreOptions o = robot::DefaultCoreOptions();
   o.mission.explore = false;  // judged after the wall-following loop
   sim::InProcessRun run = sim::RunInProcess(world, o, GetParam(), 400);
   ASSERT_EQ(run.core->state(), control::MissionState::kDone);
@@ -51,7 +51,7 @@ INSTANTIATE_TEST_SUITE_P(Seeds, Fig14AccuracyTest, ::testing::Values(1, 2, 3, 4,
 
 TEST(FiveLoopsTest, CorrectedErrorDoesNotGrowWhileOdometryDrifts) {
   const sim::World world = Load("fig18");
-  control::CoreOptions o = control::DefaultCoreOptions();
+  robot::CoreOptions o = robot::DefaultCoreOptions();
   o.mission.wall_follow_loops = 5;
   o.mission.explore = false;
   sim::InProcessRun run = sim::RunInProcess(world, o, 1, 1200);
@@ -76,9 +76,9 @@ TEST(FiveLoopsTest, CorrectedErrorDoesNotGrowWhileOdometryDrifts) {
 
 TEST(ConstraintsTest, ConstrainedEkfBeatsThePlainOneAtTheCorner) {
   const sim::World world = Load("fig17");
-  control::CoreOptions on = control::DefaultCoreOptions();
+  robot::CoreOptions on = robot::DefaultCoreOptions();
   on.mission.explore = false;
-  control::CoreOptions off = on;
+  robot::CoreOptions off = on;
   off.slam.association.use_constraints = false;
   double err_on = 0, err_off = 0;
   for (uint64_t seed = 1; seed <= 3; ++seed) {

@@ -264,12 +264,12 @@ TEST_F(E2eTest, StopHaltsTheWheelsWithinOnePeriod) {
   // The command stream around the request, in bus order: the first disabled
   // command must directly follow the last enabled one (consecutive sequence
   // numbers: no control period passed in between) and nothing enabled may follow.
-  std::vector<std::pair<proto::WheelCommand, Clock::time_point>> cmds;
+  std::vector<std::pair<proto::WheelCmd, Clock::time_point>> cmds;
   int status_ready = 0;
   for (const auto& s : tap.Frames()) {
     const auto d = proto::Decode(s.frame);
     if (!d.ok()) continue;
-    if (const auto* cmd = std::get_if<proto::WheelCommand>(&d.message)) cmds.emplace_back(*cmd, s.at);
+    if (const auto* cmd = std::get_if<proto::WheelCmd>(&d.message)) cmds.emplace_back(*cmd, s.at);
     if (const auto* st = std::get_if<proto::ControllerStatus>(&d.message)) {
       status_ready += st->state == proto::ControllerState::kReady && s.at > replied;
     }
@@ -384,11 +384,11 @@ TEST_F(E2eTest, SigtermStopsTheWheelsAndExitsCleanly) {
   daemon_.Signal(SIGTERM);
   EXPECT_EQ(daemon_.Wait(5), 0);
   Sleep(0.1);
-  std::optional<proto::WheelCommand> last;
+  std::optional<proto::WheelCmd> last;
   for (const auto& s : tap.Frames()) {
     const auto d = proto::Decode(s.frame);
-    if (d.ok() && std::holds_alternative<proto::WheelCommand>(d.message)) {
-      last = std::get<proto::WheelCommand>(d.message);
+    if (d.ok() && std::holds_alternative<proto::WheelCmd>(d.message)) {
+      last = std::get<proto::WheelCmd>(d.message);
     }
   }
   ASSERT_TRUE(last);
@@ -1045,7 +1045,7 @@ TEST_F(E2eTest, GpioEstopBumperMotorEnableAndLedOnGpioSim) {
   int after = 0;
   for (const auto& f : tap.Frames()) {
     const auto d = proto::Decode(f.frame);
-    const auto* cmd = d.ok() ? std::get_if<proto::WheelCommand>(&d.message) : nullptr;
+    const auto* cmd = d.ok() ? std::get_if<proto::WheelCmd>(&d.message) : nullptr;
     if (cmd == nullptr || f.at < pressed_at + std::chrono::milliseconds(100)) continue;
     ++after;
     EXPECT_FALSE(cmd->enable);

@@ -4,7 +4,7 @@
 
 #include <map>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 #include "sim/sim_run.h"
 #include "tests/testing/worlds.h"
 #include "tests/tools/metrics.h"
@@ -23,7 +23,7 @@ class PaperWorldTest : public ::testing::TestWithParam<std::string> {};
 TEST_P(PaperWorldTest, ReachesDoneFindingAndClassifyingEveryPieceWithoutTouchingAnything) {
   const sim::World world = Load(GetParam());
   for (uint64_t seed : {1, 2}) {
-    sim::InProcessRun run = sim::RunInProcess(world, control::DefaultCoreOptions(), seed, kLimitS);
+    sim::InProcessRun run = sim::RunInProcess(world, robot::DefaultCoreOptions(), seed, kLimitS);
     EXPECT_EQ(run.core->state(), control::MissionState::kDone) << "seed " << seed;
     EXPECT_LT(run.t, kLimitS);
     EXPECT_EQ(run.sim->collisions(), 0u) << "seed " << seed;
@@ -50,7 +50,7 @@ INSTANTIATE_TEST_SUITE_P(Worlds, PaperWorldTest, ::testing::Values("fig14", "fig
 
 TEST(RobustnessTest, ObjectTooCloseToAWallIsNotClaimedAsACompleteFreeObject) {
   const sim::World world = Load("too_close");
-  sim::InProcessRun run = sim::RunInProcess(world, control::DefaultCoreOptions(), 1, kLimitS);
+  sim::InProcessRun run = sim::RunInProcess(world, robot::DefaultCoreOptions(), 1, kLimitS);
   EXPECT_EQ(run.core->state(), control::MissionState::kDone);
   EXPECT_EQ(run.sim->collisions(), 0u);
   // The box 0.25 m from the top wall (narrower than the robot) is modelled as
@@ -75,7 +75,7 @@ TEST(RobustnessTest, ObjectTooCloseToAWallIsNotClaimedAsACompleteFreeObject) {
 TEST(RobustnessTest, StartFacingACornerOrBesideAFreeObjectStillFinishes) {
   for (const char* name : {"corner_start", "free_start"}) {
     const sim::World world = Load(name);
-    sim::InProcessRun run = sim::RunInProcess(world, control::DefaultCoreOptions(), 1, kLimitS);
+    sim::InProcessRun run = sim::RunInProcess(world, robot::DefaultCoreOptions(), 1, kLimitS);
     EXPECT_EQ(run.core->state(), control::MissionState::kDone) << name;
     // A box corner between two front beams is found by the bumper at most once.
     EXPECT_LE(run.sim->collisions(), 1u) << name;
@@ -87,7 +87,7 @@ TEST(RobustnessTest, StartFacingACornerOrBesideAFreeObjectStillFinishes) {
 
 TEST(RobustnessTest, ChairLegsNeitherTrapTheRobotNorBecomeFurniture) {
   const sim::World world = Load("chair_legs");
-  sim::InProcessRun run = sim::RunInProcess(world, control::DefaultCoreOptions(), 1, kLimitS);
+  sim::InProcessRun run = sim::RunInProcess(world, robot::DefaultCoreOptions(), 1, kLimitS);
   EXPECT_EQ(run.core->state(), control::MissionState::kDone);
   // The 4 cm legs are invisible to most beams: the bumper finds them, the robot
   // backs off and carries on, and never drives into the same leg again (the bump
@@ -138,7 +138,7 @@ TEST(FaultRunTest, MissionEndsDoneThroughLossCorruptionReorderingAndGlitches) {
   const sim::World world = testing::LoadTestWorld("fig14");
   for (uint64_t seed : {1, 2}) {
     sim::InProcessRun run =
-        sim::RunInProcess(world, control::DefaultCoreOptions(), seed, kLimitS, nullptr, &*faults);
+        sim::RunInProcess(world, robot::DefaultCoreOptions(), seed, kLimitS, nullptr, &*faults);
     EXPECT_EQ(run.core->state(), control::MissionState::kDone) << "seed " << seed;
     EXPECT_EQ(run.sim->collisions(), 0u) << "seed " << seed;
     const auto sc = metrics::ScoreObjects(run.core->Map(), run.core->slam(), world);
@@ -174,13 +174,13 @@ TEST(FaultRunTest, ABoxTheWallFollowingLoopMissedIsFoundByALaterSurvey) {
   const auto faults = sim::ParseFaultSpec("loss:p=0.05", &error);
   ASSERT_TRUE(faults) << error;
   const sim::World world = testing::LoadTestWorld("fig14");
-  sim::InProcessRun run = sim::RunInProcess(world, control::DefaultCoreOptions(), 4, 900, nullptr, &*faults);
+  sim::InProcessRun run = sim::RunInProcess(world, robot::DefaultCoreOptions(), 4, 900, nullptr, &*faults);
   EXPECT_EQ(run.core->state(), control::MissionState::kDone);
   const auto sc = metrics::ScoreObjects(run.core->Map(), run.core->slam(), world);
   EXPECT_EQ(sc.found, sc.pieces);
   EXPECT_EQ(sc.complete, sc.pieces);
   // Only with the later surveys: without them the box is never seen.
-  control::CoreOptions one = control::DefaultCoreOptions();
+  robot::CoreOptions one = robot::DefaultCoreOptions();
   one.explore.max_surveys = 1;
   sim::InProcessRun once = sim::RunInProcess(world, one, 4, 900, nullptr, &*faults);
   EXPECT_EQ(metrics::ScoreObjects(once.core->Map(), once.core->slam(), world).found, sc.pieces - 1);

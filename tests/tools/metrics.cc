@@ -17,7 +17,7 @@ const TimedPose& Nearest(const std::vector<TimedPose>& v, double t) {
 
 }  // namespace
 
-std::vector<TimedPose> ToWorld(const std::vector<slam::TrajectoryPoint>& internal,
+std::vector<TimedPose> ToWorld(const std::vector<TimedPose>& internal,
                                const Pose2& start) {
   std::vector<TimedPose> out;
   out.reserve(internal.size());

@@ -15,11 +15,6 @@
 
 namespace irslam::metrics {
 
-struct TimedPose {
-  double t;
-  Pose2 pose;
-};
-
 struct PoseErrors {
   double final_position_m = 0;
   double final_heading_rad = 0;
@@ -33,7 +28,7 @@ PoseErrors ComparePoses(const std::vector<TimedPose>& est, const std::vector<Tim
 // Position error at time t (nearest samples).
 double PositionErrorAt(const std::vector<TimedPose>& est, const std::vector<TimedPose>& truth, double t);
 
-std::vector<TimedPose> ToWorld(const std::vector<slam::TrajectoryPoint>& internal, const Pose2& start);
+std::vector<TimedPose> ToWorld(const std::vector<TimedPose>& internal, const Pose2& start);
 
 struct LineError {
   int id = 0;

@@ -8,7 +8,7 @@
 #include <map>
 #include <sstream>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 #include "daemon/config.h"
 #include "sim/sim_run.h"
 #include "tests/tools/metrics.h"
@@ -28,19 +28,19 @@ struct Run {
   double line_dist_max = 0, line_angle_max = 0;
   double aligned_wall_dist_max = 0, aligned_wall_angle_max = 0;  // map shape, after BestAlignment
   int lines = 0, wall_lines = 0, unmatched = 0;
-  std::vector<metrics::TimedPose> est, truth, odometry;
+  std::vector<TimedPose> est, truth, odometry;
   std::vector<double> loop_times;
   // Covariance over time: (t, robot heading sigma), (t, mean line sigma theta), (t, mean line sigma rho)
   std::vector<std::pair<double, double>> pose_sigma, line_sigma_theta, line_sigma_rho;
 };
 
-std::vector<metrics::TimedPose> FromJson(const nlohmann::json& arr) {
-  std::vector<metrics::TimedPose> out;
+std::vector<TimedPose> FromJson(const nlohmann::json& arr) {
+  std::vector<TimedPose> out;
   for (const auto& p : arr) out.push_back({p[0], {p[1], p[2], p[3]}});
   return out;
 }
 
-Run RunOne(const sim::World& world, control::CoreOptions o, uint64_t seed, double max_time) {
+Run RunOne(const sim::World& world, robot::CoreOptions o, uint64_t seed, double max_time) {
   Run r;
   double next_sample = 0;
   auto on_tick = [&](const sim::InProcessRun& run) {
@@ -118,7 +118,7 @@ int main(int argc, char** argv) {
   std::string config_path;
   app.add_option("--config", config_path, "irslamd config file to evaluate (default: built-in defaults)");
   CLI11_PARSE(app, argc, argv);
-  control::CoreOptions defaults = control::DefaultCoreOptions();
+  robot::CoreOptions defaults = robot::DefaultCoreOptions();
   if (!config_path.empty()) {
     std::string error;
     if (!LoadConfigFile(config_path, &defaults, &error)) {
@@ -158,7 +158,7 @@ int main(int argc, char** argv) {
      << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   std::map<std::string, std::vector<Run>> all;
   // The SLAM tables judge one wall-following loop (exploration is measured below).
-  const control::CoreOptions with_exploration = defaults;
+  const robot::CoreOptions with_exploration = defaults;
   defaults.mission.explore = false;
   for (const std::string name : {"fig14", "fig16", "fig19", "fig20", "fig17"}) {
     const sim::World world = load(name);
@@ -251,7 +251,7 @@ int main(int argc, char** argv) {
 
   // ---- Design choice: the paper pins theta_1; we estimate it (the start pose is known).
   {
-    control::CoreOptions pinned = defaults;
+    robot::CoreOptions pinned = defaults;
     pinned.slam.association.pin_first_line = true;
     md << "## Pinned vs estimated first line\n\n"
        << "The paper pins the first line's angle at its first observation. irslam estimates it like any other "
@@ -297,7 +297,7 @@ int main(int argc, char** argv) {
   // ---- Fig. 17: constraints on/off at a corner with a 5 deg beam and wheel slip.
   {
     const sim::World world = load("fig17");
-    control::CoreOptions off = defaults;
+    robot::CoreOptions off = defaults;
     off.slam.association.use_constraints = false;
     md << "## Constrained vs unconstrained EKF (Fig. 17)\n\n"
        << "The Fig. 17-like world (3 m x 3 m, 5 deg beams, slip sigma 4 %, 0.4 % wheel-radius mismatch), "
@@ -340,7 +340,7 @@ int main(int argc, char** argv) {
   // ---- Fig. 18: five loops.
   {
     const sim::World world = load("fig18");
-    control::CoreOptions five = defaults;
+    robot::CoreOptions five = defaults;
     five.mission.wall_follow_loops = 5;
     md << "## Five wall-following loops (Fig. 18)\n\n"
        << "Position error (cm) at the end of each loop; odometry drifts, the corrected estimate does not.\n\n"

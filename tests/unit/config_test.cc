@@ -11,11 +11,11 @@ namespace irslam {
 namespace {
 
 TEST(ConfigTest, ShippedFileEqualsTheBuiltInDefaults) {
-  control::CoreOptions o = control::DefaultCoreOptions();
+  robot::CoreOptions o = robot::DefaultCoreOptions();
   std::string error;
   ASSERT_TRUE(LoadConfigFile(IRSLAM_SOURCE_DIR "/daemon/irslamd.conf", &o, &error)) << error;
   // Sensor mounts and Hough angles in the file are rounded to 1e-7.
-  const auto d = control::DefaultCoreOptions();
+  const auto d = robot::DefaultCoreOptions();
   EXPECT_NEAR(o.slam.extraction.hough_theta_res_rad, d.slam.extraction.hough_theta_res_rad, 1e-7);
   EXPECT_NEAR(o.slam.extraction.hough_theta_window_rad, d.slam.extraction.hough_theta_window_rad, 1e-7);
   o.slam.extraction.hough_theta_res_rad = d.slam.extraction.hough_theta_res_rad;
@@ -34,7 +34,7 @@ TEST(ConfigTest, ShippedFileListsEveryParameter) {
   std::string error;
   const auto shipped = ParseJsonText(testing::ReadFile(IRSLAM_SOURCE_DIR "/daemon/irslamd.conf"), &error);
   ASSERT_TRUE(shipped) << error;
-  const auto all = ParseJsonText(DumpConfig(control::DefaultCoreOptions()), &error);
+  const auto all = ParseJsonText(DumpConfig(robot::DefaultCoreOptions()), &error);
   ASSERT_TRUE(all) << error;
   const nlohmann::json flat_shipped = shipped->flatten(), flat_all = all->flatten();
   for (const auto& [key, value] : flat_all.items()) {
@@ -44,18 +44,18 @@ TEST(ConfigTest, ShippedFileListsEveryParameter) {
 }
 
 TEST(ConfigTest, OverridesOnlyWhatIsGiven) {
-  control::CoreOptions o = control::DefaultCoreOptions();
+  robot::CoreOptions o = robot::DefaultCoreOptions();
   std::string error;
   ASSERT_TRUE(ParseConfig(R"({ // comment
       "wall_follow": {"follow_distance_m": 0.5}, "control": {"period_s": 0.01}})", &o, &error))
       << error;
   EXPECT_DOUBLE_EQ(o.wall.follow_distance_m, 0.5);
   EXPECT_DOUBLE_EQ(o.period_s, 0.01);
-  EXPECT_DOUBLE_EQ(o.wall.cruise_speed_mps, control::DefaultCoreOptions().wall.cruise_speed_mps);
+  EXPECT_DOUBLE_EQ(o.wall.cruise_speed_mps, robot::DefaultCoreOptions().wall.cruise_speed_mps);
 }
 
 TEST(ConfigTest, RejectsUnknownKeysByFullName) {
-  control::CoreOptions o = control::DefaultCoreOptions();
+  robot::CoreOptions o = robot::DefaultCoreOptions();
   std::string error;
   EXPECT_FALSE(ParseConfig(R"({"wall_follow": {"follow_distanse_m": 0.5}})", &o, &error));
   EXPECT_EQ(error, "config: wall_follow.follow_distanse_m is not a known key");
@@ -76,7 +76,7 @@ TEST(ConfigTest, RejectsBadValuesWithOneLineNamingTheKey) {
       {R"({"control": {"period_s": 1e999}})", "config: not valid JSON: number overflow"},
   };
   for (const auto& [text, want] : cases) {
-    control::CoreOptions o = control::DefaultCoreOptions();
+    robot::CoreOptions o = robot::DefaultCoreOptions();
     const std::string before = DumpConfig(o);
     std::string error;
     EXPECT_FALSE(ParseConfig(text, &o, &error)) << text;
@@ -87,7 +87,7 @@ TEST(ConfigTest, RejectsBadValuesWithOneLineNamingTheKey) {
 }
 
 TEST(ConfigTest, MissingFileIsOneLine) {
-  control::CoreOptions o;
+  robot::CoreOptions o;
   std::string error;
   EXPECT_FALSE(LoadConfigFile("/nonexistent/irslamd.conf", &o, &error));
   EXPECT_EQ(error, "config: cannot read /nonexistent/irslamd.conf: No such file or directory");
@@ -100,7 +100,7 @@ TEST(ConfigTest, AFifoOrDeviceIsRefusedAtOnce) {
   ::mkdir(dir.c_str(), 0700);
   const std::string fifo = dir + "/irslamd.conf";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  control::CoreOptions o;
+  robot::CoreOptions o;
   std::string error;
   EXPECT_FALSE(LoadConfigFile(fifo, &o, &error));
   EXPECT_EQ(error, "config: cannot read " + fifo + ": not a regular file");
@@ -111,7 +111,7 @@ TEST(ConfigTest, AFifoOrDeviceIsRefusedAtOnce) {
 }
 
 TEST(ConfigTest, DeepNestingIsOneLineNotACrash) {
-  control::CoreOptions o;
+  robot::CoreOptions o;
   std::string error;
   const std::string deep = "{\"slam\": " + std::string(150000, '[') + std::string(150000, ']') + "}";
   EXPECT_FALSE(ParseConfig(deep, &o, &error));

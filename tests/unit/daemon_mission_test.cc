@@ -26,7 +26,7 @@ class DaemonMissionTest : public ::testing::Test {
     options_.socket_path = dir_ + "/irslamd.sock";
     options_.config_path = dir_ + "/irslamd.conf";
     std::ofstream(options_.config_path) << "{}";
-    core_ = control::DefaultCoreOptions();
+    core_ = robot::DefaultCoreOptions();
     core_.state_dir = dir_ + "/state";
   }
   void TearDown() override {
@@ -79,7 +79,7 @@ class DaemonMissionTest : public ::testing::Test {
 
   std::string dir_;
   DaemonOptions options_;
-  control::CoreOptions core_;
+  robot::CoreOptions core_;
   WallTime now_ = WallTime(std::chrono::hours(100));
   double t_ = 0;
   boost::asio::io_context io_, sim_io_;

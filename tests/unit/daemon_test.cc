@@ -61,7 +61,7 @@ class DaemonTest : public ::testing::Test {
     dir_ = testing::MakeTempDir();
     options_.can_iface = "unix:" + dir_ + "/bus";
     options_.socket_path = dir_ + "/irslamd.sock";
-    core_ = control::DefaultCoreOptions();
+    core_ = robot::DefaultCoreOptions();
     core_.state_dir = dir_ + "/state";
   }
   void TearDown() override {
@@ -98,7 +98,7 @@ class DaemonTest : public ::testing::Test {
 
   std::string dir_;
   DaemonOptions options_;
-  control::CoreOptions core_;
+  robot::CoreOptions core_;
   WallTime now_ = WallTime(std::chrono::hours(100));
   boost::asio::io_context io_;
   std::unique_ptr<Daemon> daemon_;
@@ -249,7 +249,11 @@ TEST_F(DaemonTest, ASecondCommanderOnTheBusFaultsTheMission) {
   EXPECT_GE(heard.size(), 10u);
   EXPECT_EQ(daemon_->StatusJson()["can"]["foreign_commander_frames"], 0);
   // Someone else's wheel command.
-  other->Send(proto::Encode(proto::WheelCommand{0.2, 0.2, true, 1}));
+  proto::WheelCmd cmd;
+  cmd.left_mps = cmd.right_mps = 0.2;
+  cmd.enable = true;
+  cmd.seq = 1;
+  other->Send(proto::Encode(cmd));
   other_io.poll();
   other_io.restart();
   Pump();

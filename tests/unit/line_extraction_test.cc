@@ -4,7 +4,8 @@
 #include <random>
 
 #include "slam/line_extraction.h"
-#include "slam/types.h"
+#include "types/geometry.h"
+#include "types/signals.h"
 
 namespace irslam::slam {
 namespace {

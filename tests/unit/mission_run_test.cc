@@ -1,7 +1,7 @@
 // Wall following through the whole core, in process, on the simulator.
 #include <gtest/gtest.h>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 #include "sim/sim_run.h"
 
 namespace irslam::sim {
@@ -23,7 +23,7 @@ class WallFollowRunTest : public ::testing::TestWithParam<uint64_t> {};
 
 TEST_P(WallFollowRunTest, FollowsTheWholePerimeterWithoutTouchingAnything) {
   const World world = LoadWorld("wall_follow_fig14.json");
-  control::CoreOptions o = control::DefaultCoreOptions();
+  robot::CoreOptions o = robot::DefaultCoreOptions();
   Coverage cov;
   std::optional<Pose2> follow_start;
   double closest_return = 1e9;

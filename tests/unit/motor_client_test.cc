@@ -177,7 +177,7 @@ TEST(MotorClientTest, CountsBadFramesByReason) {
   c.Handle(f, 0);
   f.can_id = 0x555;
   c.Handle(f, 0);
-  c.Handle(Encode(proto::WheelCommand{}), 0);  // another node's command: not for us
+  c.Handle(Encode(proto::WheelCmd{}), 0);  // another node's command: not for us
   EXPECT_EQ(c.counters().wrong_dlc, 1u);
   EXPECT_EQ(c.counters().unknown_id, 1u);
   EXPECT_EQ(c.counters().ignored, 1u);
@@ -186,8 +186,8 @@ TEST(MotorClientTest, CountsBadFramesByReason) {
 
 TEST(MotorClientTest, CommandsCarrySequenceAndZeroWhenDisabled) {
   MotorClient c{MotorClientOptions{}};
-  auto a = std::get<proto::WheelCommand>(proto::Decode(c.MakeCommand({0.1, 0.2, true})).message);
-  auto b = std::get<proto::WheelCommand>(proto::Decode(c.MakeCommand({0.1, 0.2, false})).message);
+  auto a = std::get<proto::WheelCmd>(proto::Decode(c.MakeCommand({0.1, 0.2, true})).message);
+  auto b = std::get<proto::WheelCmd>(proto::Decode(c.MakeCommand({0.1, 0.2, false})).message);
   EXPECT_EQ(a.seq + 1, b.seq);
   EXPECT_DOUBLE_EQ(a.right_mps, 0.2);
   EXPECT_FALSE(b.enable);

@@ -72,7 +72,7 @@ TEST_F(ProtoDbcTest, EncodedFramesDecodeWithTheDbc) {
   EXPECT_DOUBLE_EQ(DbcDecode(enc, e.at("RightCount")), 60000);
   EXPECT_DOUBLE_EQ(DbcDecode(enc, e.at("Seq")), 200);
 
-  const can_frame cmd = Encode(WheelCommand{-0.25, 0.5, true, 7});
+  const can_frame cmd = Encode(WheelCmd{-0.25, 0.5, true, 7});
   const auto& c = dbc_.at("WHEEL_CMD").signals;
   EXPECT_NEAR(DbcDecode(cmd, c.at("LeftVelocity")), -0.25, 1e-12);
   EXPECT_NEAR(DbcDecode(cmd, c.at("RightVelocity")), 0.5, 1e-12);
@@ -100,7 +100,7 @@ TEST_F(ProtoDbcTest, EncodedFramesDecodeWithTheDbc) {
 
 TEST(CodecTest, RoundTripsEveryMessage) {
   const Message msgs[] = {
-      WheelCommand{0.123, -0.456, true, 255}, DaemonHeartbeat{5, 17},
+      WheelCmd{0.123, -0.456, true, 255}, DaemonHeartbeat{5, 17},
       ControllerStatus{ControllerState::kFault, 0x21, 3, 12.001, 65000, 4},
       EncoderCounts{1, 2, 3, 4}, IrA{1, 2, {3, 4, 4095}}, IrB{1, {5, 6, 7, 8}}};
   for (const Message& m : msgs) {
@@ -110,13 +110,13 @@ TEST(CodecTest, RoundTripsEveryMessage) {
     EXPECT_EQ(Encode(r.message).can_id, Encode(m).can_id);
     EXPECT_EQ(0, std::memcmp(Encode(r.message).data, Encode(m).data, 8));
   }
-  const auto cmd = std::get<WheelCommand>(Decode(Encode(WheelCommand{0.123, -0.456, true, 9})).message);
+  const auto cmd = std::get<WheelCmd>(Decode(Encode(WheelCmd{0.123, -0.456, true, 9})).message);
   EXPECT_DOUBLE_EQ(cmd.left_mps, 0.123);
   EXPECT_DOUBLE_EQ(cmd.right_mps, -0.456);
 }
 
 TEST(CodecTest, SaturatesOutOfRangeVelocities) {
-  const auto cmd = std::get<WheelCommand>(Decode(Encode(WheelCommand{100.0, -100.0, true, 0})).message);
+  const auto cmd = std::get<WheelCmd>(Decode(Encode(WheelCmd{100.0, -100.0, true, 0})).message);
   EXPECT_DOUBLE_EQ(cmd.left_mps, 32.767);
   EXPECT_DOUBLE_EQ(cmd.right_mps, -32.768);
 }

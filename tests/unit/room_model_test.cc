@@ -23,8 +23,8 @@ slam::LineFeature Line(int id, double x0, double y0, double x1, double y1) {
 
 // A 4 x 4 room walked at 0.4 m from its walls (the trajectory tells which side
 // each line was seen from).
-std::vector<slam::TrajectoryPoint> Loop() {
-  std::vector<slam::TrajectoryPoint> t;
+std::vector<TimedPose> Loop() {
+  std::vector<TimedPose> t;
   for (double s = 0.4; s <= 3.6; s += 0.1) {
     t.push_back({0, {s, 0.4, 0}});
     t.push_back({0, {3.6, s, 0}});

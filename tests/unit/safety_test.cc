@@ -2,7 +2,7 @@
 // emergency stop, the bumper lines, the motor-enable output and the status LED.
 #include <gtest/gtest.h>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 #include "control/safety.h"
 #include "proto/codec.h"
 #include "sim/sim_run.h"
@@ -59,21 +59,21 @@ sim::World LoadWorld(const std::string& name) {
 // The whole core on the simulator: an emergency stop at 10 s, released at 12 s,
 // start again at 14 s; the mission carries on and still closes its loop.
 TEST(EstopTest, StopsAtOnceStaysInFaultUntilReleasedAndStartedThenCarriesOn) {
-  CoreOptions o = DefaultCoreOptions();
+  robot::CoreOptions o = robot::DefaultCoreOptions();
   bool pressed = false, released = false, restarted = false;
   double lines_at_press = 0;
   double max_speed_after = 0;
   std::string start_while_pressed, reason_after_release;
   Pose2 pose_at_press{};
   auto on_tick = [&](const sim::InProcessRun& r) {
-    RobotCore& core = *r.core;
+    robot::RobotCore& core = *r.core;
     if (!pressed && r.t >= 10) {
       pressed = true;
       ASSERT_EQ(core.state(), MissionState::kWallFollow);
       ASSERT_TRUE(core.MotorEnable());
       lines_at_press = core.slam().num_lines();
       pose_at_press = r.sim->true_pose();
-      core.OnSafetyInput(RobotCore::SafetyInput::kEstop, true, r.t);
+      core.OnSafetyInput(robot::RobotCore::SafetyInput::kEstop, true, r.t);
       // At once, before the next period: fault, enable dropped, the stop frame zero.
       EXPECT_EQ(core.state(), MissionState::kFault);
       EXPECT_FALSE(core.MotorEnable());
@@ -92,7 +92,7 @@ TEST(EstopTest, StopsAtOnceStaysInFaultUntilReleasedAndStartedThenCarriesOn) {
     }
     if (pressed && !released && r.t >= 12) {
       released = true;
-      core.OnSafetyInput(RobotCore::SafetyInput::kEstop, false, r.t);
+      core.OnSafetyInput(robot::RobotCore::SafetyInput::kEstop, false, r.t);
     }
     if (released && !restarted && r.t >= 13.9 && r.t < 14) {
       reason_after_release = core.Status(r.t)["reason"];
@@ -119,14 +119,14 @@ TEST(EstopTest, StopsAtOnceStaysInFaultUntilReleasedAndStartedThenCarriesOn) {
 }
 
 TEST(EstopTest, PressedWhileIdleBlocksStartUntilReleased) {
-  CoreOptions o = DefaultCoreOptions();
-  RobotCore core(o);
-  core.OnSafetyInput(RobotCore::SafetyInput::kEstop, true, 1.0);
+  robot::CoreOptions o = robot::DefaultCoreOptions();
+  robot::RobotCore core(o);
+  core.OnSafetyInput(robot::RobotCore::SafetyInput::kEstop, true, 1.0);
   EXPECT_EQ(core.state(), MissionState::kFault);
   std::string why;
   EXPECT_FALSE(core.Start(1.1, &why));
   EXPECT_EQ(why, "emergency stop is pressed");
-  core.OnSafetyInput(RobotCore::SafetyInput::kEstop, false, 1.2);
+  core.OnSafetyInput(robot::RobotCore::SafetyInput::kEstop, false, 1.2);
   core.Tick(1.21);  // 10 ms: not yet released (debounce 20 ms)
   EXPECT_TRUE(core.Status(1.21)["safety"]["estop"].get<bool>());
   core.Tick(1.23);
@@ -137,16 +137,16 @@ TEST(EstopTest, PressedWhileIdleBlocksStartUntilReleased) {
 }
 
 TEST(BumperLineTest, AGpioBumperMakesTheRobotBackOff) {
-  CoreOptions o = DefaultCoreOptions();
+  robot::CoreOptions o = robot::DefaultCoreOptions();
   bool bumped = false;
   double min_speed_after = 1;
   std::string behaviour;
   auto on_tick = [&](const sim::InProcessRun& r) {
-    RobotCore& core = *r.core;
+    robot::RobotCore& core = *r.core;
     if (!bumped && r.t >= 10) {
       bumped = true;
-      core.OnSafetyInput(RobotCore::SafetyInput::kBumperRight, true, r.t);
-      core.OnSafetyInput(RobotCore::SafetyInput::kBumperRight, false, r.t + 0.001);
+      core.OnSafetyInput(robot::RobotCore::SafetyInput::kBumperRight, true, r.t);
+      core.OnSafetyInput(robot::RobotCore::SafetyInput::kBumperRight, false, r.t + 0.001);
       return;
     }
     if (bumped && r.t < 10.5) {
@@ -162,7 +162,7 @@ TEST(BumperLineTest, AGpioBumperMakesTheRobotBackOff) {
 }
 
 TEST(BumperBitTest, AControllerBumperBitCountsWhenTwoStatusFramesCarryIt) {
-  RobotCore core(DefaultCoreOptions());
+  robot::RobotCore core(robot::DefaultCoreOptions());
   proto::ControllerStatus st;
   st.state = proto::ControllerState::kReady;
   const auto send = [&](uint8_t bumpers, int i) {
@@ -172,10 +172,10 @@ TEST(BumperBitTest, AControllerBumperBitCountsWhenTwoStatusFramesCarryIt) {
     core.OnFrame(proto::Encode(st), 1.0 + 0.05 * i);
   };
   send(0, 0);
-  send(proto::kBumperLeft, 1);  // a flipped bit: one frame only
+  send(kBumperLeft, 1);  // a flipped bit: one frame only
   send(0, 2);
-  send(proto::kBumperRight, 3);  // a real contact: it lasts
-  send(proto::kBumperRight, 4);
+  send(kBumperRight, 3);  // a real contact: it lasts
+  send(kBumperRight, 4);
   const auto s = core.Status(1.2);
   EXPECT_EQ(s["frames"]["bumper_unconfirmed"], 1);
 }

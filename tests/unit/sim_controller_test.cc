@@ -2,7 +2,7 @@
 
 #include <cstring>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 #include "proto/codec.h"
 #include "sim/sim_run.h"
 
@@ -20,10 +20,10 @@ World OpenRoom(double slip, double mismatch) {
   return w;
 }
 
-can_frame Cmd(double l, double r) { return proto::Encode(proto::WheelCommand{l, r, true, 0}); }
+can_frame Cmd(double l, double r) { return proto::Encode(proto::WheelCmd{l, r, true, 0}); }
 
 TEST(SimControllerTest, DrivesStraightAndEncodesCounts) {
-  const auto core = control::DefaultCoreOptions();
+  const auto core = robot::DefaultCoreOptions();
   SimController sim(OpenRoom(0, 0), SimOptionsFrom(core), 1);
   std::vector<can_frame> out;
   for (int i = 0; i < 100; ++i) {  // 2 s, commands every 20 ms
@@ -46,7 +46,7 @@ TEST(SimControllerTest, DrivesStraightAndEncodesCounts) {
 }
 
 TEST(SimControllerTest, StopsTheWheelsWhenCommandsStopFor200ms) {
-  const auto core = control::DefaultCoreOptions();
+  const auto core = robot::DefaultCoreOptions();
   SimController sim(OpenRoom(0, 0), SimOptionsFrom(core), 1);
   std::vector<can_frame> out;
   sim.HandleFrame(Cmd(0.3, 0.3));
@@ -60,7 +60,7 @@ TEST(SimControllerTest, StopsTheWheelsWhenCommandsStopFor200ms) {
 }
 
 TEST(SimControllerTest, CollisionStopsTheRobotAndSetsABumper) {
-  auto core = control::DefaultCoreOptions();
+  auto core = robot::DefaultCoreOptions();
   World w = OpenRoom(0, 0);
   w.objects.push_back({11.0, 9.0, 12.0, 11.0});
   SimController sim(w, SimOptionsFrom(core), 1);
@@ -71,11 +71,11 @@ TEST(SimControllerTest, CollisionStopsTheRobotAndSetsABumper) {
   }
   EXPECT_NEAR(sim.true_pose().x, 11.0 - core.slam.geometry.radius_m, 0.01);
   EXPECT_EQ(sim.collisions(), 1u);
-  EXPECT_EQ(sim.bumpers(), proto::kBumperLeft | proto::kBumperRight);
+  EXPECT_EQ(sim.bumpers(), kBumperLeft | kBumperRight);
 }
 
 TEST(SimControllerTest, SameSeedSameRun) {
-  const auto core = control::DefaultCoreOptions();
+  const auto core = robot::DefaultCoreOptions();
   SimController a(OpenRoom(0.02, 0.001), SimOptionsFrom(core), 7);
   SimController b(OpenRoom(0.02, 0.001), SimOptionsFrom(core), 7);
   SimController c(OpenRoom(0.02, 0.001), SimOptionsFrom(core), 8);
@@ -93,7 +93,7 @@ TEST(SimControllerTest, SameSeedSameRun) {
 }
 
 TEST(SimControllerTest, WheelRadiusMismatchMakesOdometryDrift) {
-  const auto core = control::DefaultCoreOptions();
+  const auto core = robot::DefaultCoreOptions();
   SimController sim(OpenRoom(0, 0.002), SimOptionsFrom(core), 1);
   std::vector<can_frame> out;
   for (int i = 0; i < 1000; ++i) {
@@ -106,14 +106,14 @@ TEST(SimControllerTest, WheelRadiusMismatchMakesOdometryDrift) {
 }
 
 TEST(SimControllerTest, IrSensorsSeeTheWallAtTheRightDistance) {
-  const auto core = control::DefaultCoreOptions();
+  const auto core = robot::DefaultCoreOptions();
   World w = OpenRoom(0, 0);
   w.noise.ir_voltage_sigma_rel = 0;
   w.objects.push_back({10.6, 5, 11, 15});  // a wall 0.6 m ahead of the centre
   SimController sim(w, SimOptionsFrom(core), 1);
   std::vector<can_frame> out;
   sim.AdvanceTo(0.05, &out);
-  control::RobotCore rc(core);
+  robot::RobotCore rc(core);
   for (const auto& f : out) rc.OnFrame(f, 0.05);
   const auto ranges = rc.Status(0.05)["ir_ranges"];
   ASSERT_TRUE(ranges[3].is_number());

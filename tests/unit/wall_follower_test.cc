@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 #include "control/wall_follower.h"
 
 namespace irslam::control {
@@ -9,7 +9,7 @@ namespace {
 // Ranges the default sensor ring would read with a wall parallel to the heading at
 // distance d on the right (from the robot centre), rotated by `angle` (wall turns left).
 RangeScan WallOnRight(double d, double angle) {
-  const auto mounts = DefaultCoreOptions().slam.mounts;
+  const auto mounts = robot::DefaultCoreOptions().slam.mounts;
   RangeScan s;
   for (int i = 0; i < kNumIrSensors; ++i) {
     const auto& m = mounts[i];
@@ -24,7 +24,7 @@ RangeScan WallOnRight(double d, double angle) {
 }
 
 TEST(WallFollowerTest, EstimatesTheRightWall) {
-  const auto o = DefaultCoreOptions();
+  const auto o = robot::DefaultCoreOptions();
   WallFollower f(o.wall, o.slam.mounts, 0.17);
   auto w = f.RightWall(WallOnRight(0.40, 0.0));
   ASSERT_TRUE(w);
@@ -38,7 +38,7 @@ TEST(WallFollowerTest, EstimatesTheRightWall) {
 }
 
 TEST(WallFollowerTest, SteersBackTowardsTheFollowDistance) {
-  const auto o = DefaultCoreOptions();
+  const auto o = robot::DefaultCoreOptions();
   WallFollower f(o.wall, o.slam.mounts, 0.17);
   // Find the wall first (it is right there), then follow.
   RangeScan near = WallOnRight(0.40, 0.0);
@@ -54,7 +54,7 @@ TEST(WallFollowerTest, SteersBackTowardsTheFollowDistance) {
 }
 
 TEST(WallFollowerTest, GoesRoundACornerSeenByTheSideSensorAloneWhenContourFollowing) {
-  const auto o = DefaultCoreOptions();
+  const auto o = robot::DefaultCoreOptions();
   // Only the side sensor sees something: the corner of a small box being passed.
   const auto corner = [](double range) {
     RangeScan s;
@@ -93,7 +93,7 @@ TEST(WallFollowerTest, GoesRoundACornerSeenByTheSideSensorAloneWhenContourFollow
 }
 
 TEST(WallFollowerTest, TurnsLeftAtAnInnerCorner) {
-  const auto o = DefaultCoreOptions();
+  const auto o = robot::DefaultCoreOptions();
   WallFollower f(o.wall, o.slam.mounts, 0.17);
   RangeScan s = WallOnRight(0.40, 0.0);
   f.Step(0.00, s, false);
@@ -106,7 +106,7 @@ TEST(WallFollowerTest, TurnsLeftAtAnInnerCorner) {
 }
 
 TEST(WallFollowerTest, ArcsRightAtAnOuterCorner) {
-  const auto o = DefaultCoreOptions();
+  const auto o = robot::DefaultCoreOptions();
   WallFollower f(o.wall, o.slam.mounts, 0.17);
   RangeScan s = WallOnRight(0.40, 0.0);
   f.Step(0.00, s, false);
@@ -119,7 +119,7 @@ TEST(WallFollowerTest, ArcsRightAtAnOuterCorner) {
 }
 
 TEST(WallFollowerTest, BacksOffWhenBumped) {
-  const auto o = DefaultCoreOptions();
+  const auto o = robot::DefaultCoreOptions();
   WallFollower f(o.wall, o.slam.mounts, 0.17);
   const Twist t = f.Step(0.0, RangeScan{}, true);
   EXPECT_EQ(f.mode(), FollowMode::kBackoff);

@@ -2,8 +2,8 @@
 // code. Frames in (with the host's robot time), frames out once per control
 // period, status and map as JSON values. The daemon drives it from its event
 // loop; `irslam-sim run` drives the very same object in process.
-#ifndef IRSLAM_CONTROL_ROBOT_CORE_H_
-#define IRSLAM_CONTROL_ROBOT_CORE_H_
+#ifndef IRSLAM_ROBOT_ROBOT_CORE_H_
+#define IRSLAM_ROBOT_ROBOT_CORE_H_
 
 #include <linux/can.h>
 
@@ -17,7 +17,16 @@
 #include "drivers/motor_client.h"
 #include "slam/slam.h"
 
-namespace irslam::control {
+namespace irslam::robot {
+
+using control::Debouncer;
+using control::ExploreOptions;
+using control::GpioSettings;
+using control::Mission;
+using control::MissionOptions;
+using control::MissionState;
+using control::ModelOptions;
+using control::WallFollowerOptions;
 
 // The control socket's settings (config section [api]; used by irslamd only).
 struct ApiSettings {
@@ -106,6 +115,6 @@ class RobotCore {
   WheelCommand last_cmd_;
 };
 
-}  // namespace irslam::control
+}  // namespace irslam::robot
 
-#endif  // IRSLAM_CONTROL_ROBOT_CORE_H_
+#endif  // IRSLAM_ROBOT_ROBOT_CORE_H_

@@ -1,10 +1,12 @@
-#include "control/robot_core.h"
+#include "robot/robot_core.h"
 
 #include <cmath>
 
 #include "proto/codec.h"
 
-namespace irslam::control {
+namespace irslam::robot {
+
+using namespace control;  // NOLINT(google-build-using-namespace): the behaviours RobotCore orchestrates
 
 CoreOptions DefaultCoreOptions() {
   CoreOptions o;
@@ -18,7 +20,7 @@ CoreOptions DefaultCoreOptions() {
 }
 
 namespace {
-drivers::MotorClientOptions WithCountLimit(drivers::MotorClientOptions m, const slam::RobotGeometry& g) {
+drivers::MotorClientOptions WithCountLimit(drivers::MotorClientOptions m, const RobotGeometry& g) {
   m.max_counts_per_s = m.plausible_speed_factor * g.max_wheel_speed_mps / (2 * M_PI * g.wheel_radius_m) *
                        g.counts_per_rev;
   return m;
@@ -126,8 +128,8 @@ std::vector<can_frame> RobotCore::Tick(double now_s) {
   } else if (alive && mission_.state() == MissionState::kFault) {
     mission_.ClearFault(now_s);
   }
-  const uint8_t gpio_bumpers = static_cast<uint8_t>((bump_left_.Poll(now_s) ? proto::kBumperLeft : 0) |
-                                                    (bump_right_.Poll(now_s) ? proto::kBumperRight : 0));
+  const uint8_t gpio_bumpers = static_cast<uint8_t>((bump_left_.Poll(now_s) ? kBumperLeft : 0) |
+                                                    (bump_right_.Poll(now_s) ? kBumperRight : 0));
   last_cmd_ = mission_.Step(now_s, slam_, scan_, bumpers_ | gpio_bumpers);
   out.push_back(motor_.MakeCommand(last_cmd_));
   if (now_s - last_heartbeat_ >= options_.heartbeat_period_s - 1e-9) {
@@ -281,4 +283,4 @@ nlohmann::json RobotCore::Map() const {
   };
 }
 
-}  // namespace irslam::control
+}  // namespace irslam::robot

@@ -1,0 +1,36 @@
+// The robot's fixed facts, shared by the protocol, the drivers, SLAM and control:
+// how many IR sensors it has and where they sit, its wheels and body, its bumpers.
+#ifndef IRSLAM_TYPES_ROBOT_H_
+#define IRSLAM_TYPES_ROBOT_H_
+
+#include <cmath>
+#include <cstdint>
+
+namespace irslam {
+
+inline constexpr int kNumIrSensors = 7;
+
+// Bumper bits (CTRL_STATUS.Bumpers on the bus, and the GPIO bumpers).
+inline constexpr uint8_t kBumperLeft = 1 << 0;
+inline constexpr uint8_t kBumperRight = 1 << 1;
+
+struct RobotGeometry {
+  double wheel_base_m = 0.25;      // distance between the wheels' contact points
+  double wheel_radius_m = 0.035;
+  double counts_per_rev = 2048;    // encoder counts per wheel revolution
+  double radius_m = 0.17;          // robot body radius (round robot)
+  double max_wheel_speed_mps = 0.5;
+
+  double metres_per_count() const { return 2.0 * M_PI * wheel_radius_m / counts_per_rev; }
+};
+
+// Where an IR sensor sits on the robot (robot frame: x forward, y left).
+struct SensorMount {
+  double x = 0;
+  double y = 0;
+  double theta = 0;
+};
+
+}  // namespace irslam
+
+#endif  // IRSLAM_TYPES_ROBOT_H_
