@@ -2,9 +2,28 @@
 
 #include <cstdio>
 
-#include "io/json_text.h"
-
 namespace irslam {
+namespace {
+
+// A client's string for a log line: printable ASCII as it is, every other byte
+// (newline, control characters, non-ASCII) and the backslash as \xNN, so that a
+// name with a newline and "<0>" cannot forge log lines.
+std::string LogField(std::string_view s) {
+  std::string out;
+  for (const char c : s) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u >= 0x20 && u < 0x7f && c != '\\') {
+      out += c;
+    } else {
+      char buf[5];
+      std::snprintf(buf, sizeof buf, "\\x%02x", u);
+      out += buf;
+    }
+  }
+  return out;
+}
+
+}  // namespace
 
 const RpcMethod* RpcMethodTable::Find(std::string_view name) const {
   for (const auto& m : methods_) {
@@ -28,7 +47,7 @@ nlohmann::json RpcMethodTable::Handle(const rpc::Request& req, const PeerCred& p
   const bool control = need == Access::kControl;
   if (!Allowed(policy, peer, need)) {
     // Escaped: a name with a newline and "<0>" must not forge log lines.
-    std::fprintf(stderr, "<4>api: denied method=%s uid=%u pid=%d\n", DumpJson(nlohmann::json(req.method)).c_str(),
+    std::fprintf(stderr, "<4>api: denied method=%s uid=%u pid=%d\n", LogField(req.method).c_str(),
                  static_cast<unsigned>(peer.uid), static_cast<int>(peer.pid));
     return rpc::MakeError(req.id, rpc::kAccessDenied,
                           "access denied: " + req.method + " needs the " + (control ? "control" : "read") + " group");

@@ -210,7 +210,7 @@ TEST_F(DaemonTest, MethodTableHoldsTheAccessRuleOfEveryMethod) {
   call("x\n<0>irslamd: forged", nobody);
   const std::string log = ::testing::internal::GetCapturedStderr();
   EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 1) << log;
-  EXPECT_NE(log.find("method=\"x\\n<0>irslamd: forged\""), std::string::npos) << log;
+  EXPECT_NE(log.find("method=x\\x0a<0>irslamd: forged uid=4243"), std::string::npos) << log;
 }
 
 TEST_F(DaemonTest, StatusHasTheDaemonsPartsAndStopWithoutAMissionSavesNothing) {
