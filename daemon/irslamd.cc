@@ -1,16 +1,8 @@
 #include "daemon/irslamd.h"
 
-#include <systemd/sd-daemon.h>
-
 #include <unistd.h>
 
-#include <sys/socket.h>
-#include <sys/un.h>
-
-#include <cstddef>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <thread>
 
 #include "daemon/config.h"
@@ -19,65 +11,78 @@
 namespace irslam {
 
 namespace {
-int64_t Ns(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
+int64_t PeriodNs(const robot::CoreOptions& core, double time_scale) {
+  return static_cast<int64_t>(core.period_s / time_scale * 1e9);
 }
 }  // namespace
 
-Daemon::Daemon(boost::asio::io_context& io, DaemonOptions options, robot::CoreOptions core)
+int64_t Daemon::Ns(WallTime t) {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
+}
+
+Daemon::Daemon(boost::asio::io_context& io, DaemonOptions options, robot::CoreOptions core, WallClock clock)
     : io_(io),
       options_(std::move(options)),
       core_options_(core),
+      clock_(std::move(clock)),
+      start_(clock_()),
       core_(std::make_unique<robot::RobotCore>(core)),
       timer_(io),
       signals_(io, SIGINT, SIGTERM, SIGHUP),
-      start_(Clock::now()),
-      scheduler_(static_cast<int64_t>(core.period_s / options_.time_scale * 1e9), Ns(start_)),
-      store_(core.state_dir) {}
+      scheduler_(PeriodNs(core, options_.time_scale), Ns(start_)),
+      notifier_(options_.notify_socket),
+      watchdog_(options_.watchdog_usec),
+      maps_(core.state_dir, clock_),
+      methods_(MakeMethods()) {}
 
-Daemon::~Daemon() {
-  if (notify_fd_ >= 0) ::close(notify_fd_);
-}
-
-double Daemon::WallNow() const {
-  return std::chrono::duration<double>(Clock::now() - start_).count();
-}
-
-double Daemon::RobotNow() const { return WallNow() * options_.time_scale; }
+Daemon::~Daemon() = default;
 
 bool Daemon::Open(std::string* error) {
   drivers::CanBusOptions bus_options;
   bus_options.iface = options_.can_iface;
-  bus_options.rx_ids = {proto::kControllerStatusId, proto::kEncoderId, proto::kIrAId,
-                        proto::kIrBId};
+  // The wheel-command and heartbeat ids too: only another commander sends them.
+  bus_options.rx_ids = {proto::kControllerStatusId, proto::kEncoderId, proto::kIrAId, proto::kIrBId,
+                        proto::kWheelCmdId, proto::kDaemonHeartbeatId};
   bus_ = drivers::OpenCanBus(io_, bus_options, error);
   if (!bus_) return false;
-  // The map saved by the previous run (a bad file is moved aside, never loaded).
-  stored_ = store_.Load(&store_error_);
-  if (!store_error_.empty()) std::fprintf(stderr, "<3>irslamd: %s\n", store_error_.c_str());
-  if (stored_) {
-    std::fprintf(stderr, "<6>irslamd: map loaded from %s (save %llu, %s, %zu lines)\n", store_.path().c_str(),
-                 static_cast<unsigned long long>(stored_->seq), stored_->reason.c_str(),
-                 stored_->map.value("lines", nlohmann::json::array()).size());
-  }
+  maps_.Load();  // the map saved by the previous run (a bad file is moved aside, never loaded)
   // A configured safety line that cannot be had is an error, never ignored.
   gpio_ = drivers::Gpio::Open(io_, core_options_.gpio, error);
   if (!gpio_) return false;
-  const auto& a = core_options_.api;
-  access_.daemon_uid = ::getuid();
-  std::optional<gid_t> socket_gid;
-  for (const auto& [name, out] : {std::pair<const std::string*, std::optional<gid_t>*>{&a.socket_group, &socket_gid},
-                                  {&a.read_group, &access_.read_gid},
-                                  {&a.control_group, &access_.control_gid}}) {
-    if (name->empty()) continue;
-    *out = GroupId(*name, error);
-    if (!*out) return false;
-  }
+  if (!OpenAccess(error)) return false;
   api_ = std::make_unique<ApiServer>(io_, options_.socket_path, options_.limits, this);
-  if (!api_->Listen(error, socket_gid)) return false;
-  bus_->Start([this](const can_frame& f, double) { core_->OnFrame(f, RobotNow()); });
+  if (!api_->Listen(error, socket_gid_)) return false;
+  bus_->Start([this](const can_frame& f, double) { OnFrame(f); });
   gpio_->Start([this](drivers::Gpio::Input in, bool active) { OnGpioInput(in, active); });
   return true;
+}
+
+bool Daemon::OpenAccess(std::string* error) {
+  const auto& a = core_options_.api;
+  access_.daemon_uid = ::getuid();
+  const std::pair<const std::string*, std::optional<gid_t>*> groups[] = {
+      {&a.socket_group, &socket_gid_}, {&a.read_group, &access_.read_gid}, {&a.control_group, &access_.control_gid}};
+  for (const auto& g : groups) {
+    if (g.first->empty()) continue;
+    *g.second = GroupId(*g.first, error);
+    if (!*g.second) return false;
+  }
+  return true;
+}
+
+void Daemon::OnFrame(const can_frame& f) {
+  if (!ForeignCommanderWatch::IsCommanderFrame(f)) {
+    core_->OnFrame(f, RobotNow());
+    return;
+  }
+  if (foreign_.OnFrame(WallNow())) {
+    // Never fight over the wheels: stop and fault until it is gone and start is called.
+    core_->LatchFault(RobotNow(), kForeignCommanderReason);
+    if (bus_) bus_->Send(core_->StopFrame());
+    ApplyOutputs(RobotNow());
+    std::fprintf(stderr, "<2>irslamd: %s (CAN id 0x%03x): wheels stopped, mission in fault\n",
+                 kForeignCommanderReason, f.can_id & CAN_SFF_MASK);
+  }
 }
 
 void Daemon::OnGpioInput(drivers::Gpio::Input input, bool active) {
@@ -97,81 +102,36 @@ void Daemon::OnGpioInput(drivers::Gpio::Input input, bool active) {
   }
 }
 
-void Daemon::SaveMap(const char* reason) {
-  if (!mission_ran_) return;  // nothing new: never overwrite the saved map with an empty one
-  StoredMap m;
-  m.seq = (stored_ ? stored_->seq : 0) + 1;
-  m.reason = reason;
-  m.map = core_->Map();
-  const auto t0 = Clock::now();
-  std::string error;
-  if (store_.Save(m, &error)) {
-    ++saves_;
-    stored_ = std::move(m);
-    store_error_.clear();
-  } else {
-    ++save_errors_;
-    store_error_ = error;
-    std::fprintf(stderr, "<3>irslamd: %s\n", error.c_str());
-  }
-  last_save_ms_ = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
 void Daemon::ApplyOutputs(double now) {
   if (!gpio_) return;
   gpio_->SetMotorEnable(running_ && core_->MotorEnable());
   gpio_->SetLed(core_->StatusLed(now));
 }
 
-void Daemon::Notify(const std::string& text) {
-  // Not sd_notify(): it sends on a blocking socket, and a notify socket whose
-  // queue is full (net.unix.max_dgram_qlen) would stall the control loop. A
-  // message that does not fit now is dropped and counted; the next WATCHDOG=1
-  // comes half a watchdog interval later.
-  const char* path = std::getenv("NOTIFY_SOCKET");
-  if (path == nullptr || (path[0] != '/' && path[0] != '@')) return;
-  if (notify_fd_ < 0) notify_fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
-  if (notify_fd_ < 0) return;
-  sockaddr_un addr{};
-  addr.sun_family = AF_UNIX;
-  const size_t n = std::min(std::strlen(path), sizeof addr.sun_path - 1);
-  std::memcpy(addr.sun_path, path, n);
-  if (addr.sun_path[0] == '@') addr.sun_path[0] = '\0';  // abstract namespace
-  const auto len = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + n);
-  if (::sendto(notify_fd_, text.data(), text.size(), MSG_DONTWAIT | MSG_NOSIGNAL,
-               reinterpret_cast<sockaddr*>(&addr), len) < 0) {
-    ++notify_dropped_;
-  }
-}
-
 int Daemon::Run() {
   running_ = true;
-  signals_.async_wait([this](const boost::system::error_code& ec, int signo) {
-    if (!ec) OnSignal(signo);
-  });
-  if (sd_watchdog_enabled(0, &watchdog_usec_) <= 0) watchdog_usec_ = 0;
-  start_ = Clock::now();
+  WaitSignal();
+  start_ = clock_();
   scheduler_ = PeriodScheduler(scheduler_.period_ns(), Ns(start_));
   ArmTimer();
-  std::fprintf(stderr, "<6>irslamd: ready can=%s socket=%s period=%.3fs time_scale=%g\n",
-               bus_->name().c_str(), options_.socket_path.c_str(), core_options_.period_s,
-               options_.time_scale);
-  Notify("READY=1\nSTATUS=state=idle");
+  std::fprintf(stderr, "<6>irslamd: ready can=%s socket=%s period=%.3fs time_scale=%g\n", bus_->name().c_str(),
+               options_.socket_path.c_str(), core_options_.period_s, options_.time_scale);
+  notifier_.Send("READY=1\nSTATUS=state=idle");
   io_.run();
-  return 0;
+  return exit_status_;
 }
 
 void Daemon::ArmTimer() {
-  timer_.expires_at(Clock::time_point(std::chrono::nanoseconds(scheduler_.deadline_ns())));
+  timer_.expires_at(WallTime(std::chrono::nanoseconds(scheduler_.deadline_ns())));
   timer_.async_wait([this](const boost::system::error_code& ec) {
     if (ec || !running_) return;
-    OnTick();
+    Tick();
     ArmTimer();
   });
 }
 
-void Daemon::OnTick() {
-  const auto woke = Clock::now();
+void Daemon::Tick() {
+  const WallTime woke = clock_();
   scheduler_.OnWake(Ns(woke));
   if (api_) api_->NewPeriod();
   const double now = RobotNow();
@@ -181,47 +141,58 @@ void Daemon::OnTick() {
   }
   for (const can_frame& f : core_->Tick(now)) bus_->Send(f);
   ApplyOutputs(now);
-  if (core_->state() != last_state_) {
-    // Each model completion is saved (the model step just ended).
-    if (last_state_ == control::MissionState::kModel) SaveMap("model");
-    last_state_ = core_->state();
-    std::fprintf(stderr, "<6>irslamd: state=%s reason=\"%s\"\n", control::ToString(last_state_),
-                 core_->Status(now)["reason"].get<std::string>().c_str());
-    Notify(std::string("STATUS=state=") + control::ToString(last_state_));
-  }
+  OnStateChange(now);
+  maps_.Poll([this] { return LiveMap(); });
   // The watchdog is fed from the loop itself, so a stalled loop is noticed.
-  const double wall = WallNow();
-  if (watchdog_usec_ > 0 && wall - last_watchdog_ >= static_cast<double>(watchdog_usec_) * 0.5e-6) {
-    last_watchdog_ = wall;
-    Notify("WATCHDOG=1");
-  }
-  max_work_s_ = std::max(max_work_s_, std::chrono::duration<double>(Clock::now() - woke).count());
+  if (watchdog_.Due(WallNow())) notifier_.Send("WATCHDOG=1");
+  max_work_s_ = std::max(max_work_s_, SecondsBetween(woke, clock_()));
+}
+
+void Daemon::OnStateChange(double now) {
+  if (core_->state() == last_state_) return;
+  // Each model completion is saved (the model step just ended).
+  if (last_state_ == control::MissionState::kModel) maps_.Save("model", [this] { return LiveMap(); });
+  last_state_ = core_->state();
+  std::fprintf(stderr, "<6>irslamd: state=%s reason=\"%s\"\n", control::ToString(last_state_),
+               core_->Status(now)["reason"].get<std::string>().c_str());
+  notifier_.Send(std::string("STATUS=state=") + control::ToString(last_state_));
+  // A config that came during the mission: the new core hears the controller
+  // before the next start.
+  ApplyPendingOptions();
+}
+
+void Daemon::WaitSignal() {
+  signals_.async_wait([this](const boost::system::error_code& ec, int signo) {
+    if (!ec) OnSignal(signo);
+  });
 }
 
 void Daemon::OnSignal(int signo) {
   if (signo == SIGHUP) {
     Reload();
-    signals_.async_wait([this](const boost::system::error_code& ec, int s) {
-      if (!ec) OnSignal(s);
-    });
+    WaitSignal();
     return;
   }
   std::fprintf(stderr, "<6>irslamd: signal %d: stopping the wheels and exiting\n", signo);
   Shutdown();
 }
 
-void Daemon::Shutdown() {
-  Notify("STOPPING=1");
+int Daemon::Shutdown() {
+  notifier_.Send("STOPPING=1");
   running_ = false;
   core_->Stop(RobotNow());
   if (bus_) bus_->Send(core_->StopFrame());
   if (gpio_) gpio_->Close();  // motor driver disabled, LED off
-  SaveMap("shutdown");
+  if (maps_.Save("shutdown", [this] { return LiveMap(); }, /*final=*/true) == SaveResult::kFailed) {
+    std::fprintf(stderr, "<3>irslamd: the final map save failed: exit status 1\n");
+    exit_status_ = 1;
+  }
   timer_.cancel();
   signals_.cancel();
   if (api_) api_->Close();
   if (bus_) bus_->Close();
   io_.stop();
+  return exit_status_;
 }
 
 void Daemon::Reload() {
@@ -232,123 +203,50 @@ void Daemon::Reload() {
   robot::CoreOptions fresh = robot::DefaultCoreOptions();
   std::string error;
   if (!LoadConfigFile(options_.config_path, &fresh, &error)) {
-    std::fprintf(stderr, "<3>irslamd: reload failed, keeping the running config: %s\n",
-                 error.c_str());
+    std::fprintf(stderr, "<3>irslamd: reload failed, keeping the running config: %s\n", error.c_str());
     return;
   }
   const auto s = core_->state();
   if (s == control::MissionState::kIdle || s == control::MissionState::kDone) {
     pending_options_.reset();
-    if (!fresh.gpio.SameLines(core_options_.gpio)) {
-      std::fprintf(stderr, "<4>irslamd: [gpio] lines are opened at start: the change applies after a restart\n");
-      const double debounce_s = fresh.gpio.debounce_s;  // this applies at once
-      fresh.gpio = core_options_.gpio;
-      fresh.gpio.debounce_s = debounce_s;
-    }
-    core_options_ = fresh;
-    auto next = std::make_unique<robot::RobotCore>(fresh);
-    core_ = std::move(next);
-    if (gpio_) gpio_->Replay();  // the new core learns the inputs' present levels
-    scheduler_ = PeriodScheduler(static_cast<int64_t>(fresh.period_s / options_.time_scale * 1e9),
-                                 Ns(Clock::now()));
+    ApplyOptions(std::move(fresh));  // the map service keeps the old core's map
     std::fprintf(stderr, "<5>irslamd: config reloaded from %s\n", options_.config_path.c_str());
   } else {
-    pending_options_ = fresh;
+    pending_options_ = std::move(fresh);
     std::fprintf(stderr, "<5>irslamd: config from %s validated; applied when the mission ends\n",
                  options_.config_path.c_str());
   }
 }
 
-nlohmann::json Daemon::StatusJson() {
-  const double now = RobotNow();
-  nlohmann::json s = core_->Status(now);
-  s["uptime"] = WallNow();
-  s["time_scale"] = options_.time_scale;
-  s["period"] = {{"target", core_options_.period_s},
-                 {"ticks", scheduler_.ticks()},
-                 {"overruns", scheduler_.overruns()},
-                 {"jitter_mean", scheduler_.mean_late_ns() * 1e-9},
-                 {"jitter_max", static_cast<double>(scheduler_.max_late_ns()) * 1e-9},
-                 {"jitter_last", static_cast<double>(scheduler_.last_late_ns()) * 1e-9},
-                 {"work_max", max_work_s_}};
-  const auto& c = bus_->stats();
-  s["can"] = {{"iface", bus_->name()},     {"rx", c.rx_frames},
-              {"tx", c.tx_frames},         {"rx_dropped", c.rx_dropped},
-              {"tx_dropped", c.tx_dropped}, {"filtered", c.filtered},
-              {"error_frames", c.error_frames}, {"bus_off", c.bus_off},
-              {"link_up", c.link_up},      {"link_down_events", c.link_down_events},
-              {"last_error", c.last_error},
-              {"last_rx_time", c.last_rx_time},   {"kernel_timestamps", c.kernel_timestamps}};
-  s["api"] = api_->StatsJson();
-  s["config_pending"] = pending_options_.has_value();
-  s["notify_dropped"] = notify_dropped_;
-  nlohmann::json lines = nlohmann::json::object();
-  for (const auto& l : gpio_->lines()) {
-    lines[l.role] = {{"chip", l.chip}, {"label", l.label}, {"offset", l.offset}, {"name", l.name},
-                     {"output", l.output}, {"active", l.active}};
-  }
-  s["gpio"] = {{"lines", lines}, {"events", gpio_->events()}};
-  s["map_store"] = {{"path", store_.path()},
-                    {"seq", stored_ ? stored_->seq : 0},
-                    {"saved_map", stored_.has_value()},
-                    {"saves", saves_},
-                    {"save_errors", save_errors_},
-                    {"last_save_ms", last_save_ms_},
-                    {"error", store_error_}};
-  return s;
+void Daemon::ApplyPendingOptions() {
+  const auto s = core_->state();
+  if (!pending_options_ || (s != control::MissionState::kIdle && s != control::MissionState::kDone)) return;
+  ApplyOptions(*std::move(pending_options_));
+  pending_options_.reset();
+  std::fprintf(stderr, "<5>irslamd: config from %s applied\n", options_.config_path.c_str());
 }
 
-nlohmann::json Daemon::StatusNotification() { return StatusJson(); }
+void Daemon::ApplyOptions(robot::CoreOptions fresh) {
+  if (!fresh.gpio.SameLines(core_options_.gpio)) {
+    std::fprintf(stderr, "<4>irslamd: [gpio] lines are opened at start: the change applies after a restart\n");
+    const double debounce_s = fresh.gpio.debounce_s;  // this applies at once
+    fresh.gpio = core_options_.gpio;
+    fresh.gpio.debounce_s = debounce_s;
+  }
+  maps_.OnCoreReplaced(LiveMap());  // the old core's map is kept (and saved if it was not)
+  core_options_ = fresh;
+  core_ = std::make_unique<robot::RobotCore>(fresh);
+  if (foreign_.Present(WallNow())) core_->LatchFault(RobotNow(), kForeignCommanderReason);
+  if (gpio_) gpio_->Replay();  // the new core learns the inputs' present levels
+  scheduler_ = PeriodScheduler(PeriodNs(fresh, options_.time_scale), Ns(clock_()));
+}
 
 bool Daemon::MaySubscribe(const PeerCred& peer) {
-  return Allowed(access_, peer.uid, peer.groups, Access::kRead);
+  return methods_.Allowed(access_, peer, methods_.Needs("subscribe"));
 }
 
 void Daemon::Handle(const rpc::Request& req, const PeerCred& peer, Reply reply) {
-  reply(HandleNow(req, peer));
-}
-
-nlohmann::json Daemon::HandleNow(const rpc::Request& req, const PeerCred& peer) {
-  const double now = RobotNow();
-  const bool control = req.method == "start" || req.method == "stop";
-  if (!Allowed(access_, peer.uid, peer.groups, control ? Access::kControl : Access::kRead)) {
-    std::fprintf(stderr, "<4>api: denied method=%s uid=%u pid=%d\n", rpc::EscapeForLog(req.method).c_str(),
-                 static_cast<unsigned>(peer.uid), static_cast<int>(peer.pid));
-    return rpc::MakeError(req.id, rpc::kAccessDenied,
-                          "access denied: " + req.method + " needs the " +
-                              (control ? "control" : "read") + " group");
-  }
-  if (req.method == "status") return rpc::MakeResult(req.id, StatusJson());
-  if (req.method == "map") {
-    // Before any mission of this run: the map saved by the previous one.
-    if (!mission_ran_ && stored_) {
-      nlohmann::json m = stored_->map;
-      m["saved"] = {{"seq", stored_->seq}, {"reason", stored_->reason}, {"path", store_.path()}};
-      return rpc::MakeResult(req.id, m);
-    }
-    return rpc::MakeResult(req.id, core_->Map());
-  }
-  if (req.method == "start") {
-    const auto s = core_->state();
-    if (pending_options_ &&
-        (s == control::MissionState::kIdle || s == control::MissionState::kDone)) {
-      Reload();
-    }
-    std::string why;
-    if (!core_->Start(now, &why)) return rpc::MakeError(req.id, rpc::kRejected, "start rejected: " + why);
-    mission_ran_ = true;
-    std::fprintf(stderr, "<6>irslamd: mission started\n");
-    return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
-  }
-  if (req.method == "stop") {
-    core_->Stop(now);
-    bus_->Send(core_->StopFrame());  // at once, not at the next period
-    ApplyOutputs(now);
-    SaveMap("stop");
-    std::fprintf(stderr, "<6>irslamd: stopped by request\n");
-    return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
-  }
-  return rpc::MakeError(req.id, rpc::kMethodNotFound, "method not found: " + req.method);
+  reply(methods_.Handle(req, peer, access_));
 }
 
 }  // namespace irslam

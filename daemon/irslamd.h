@@ -1,12 +1,17 @@
-// The daemon's thin shell: one io_context, the CAN bus, the fixed-period control
-// loop, the JSON-RPC API, signals and systemd notification around a RobotCore.
+// The daemon's loop and lifecycle around a RobotCore: one io_context, the CAN
+// bus, GPIO, the fixed-period control loop, the JSON-RPC API, signals (SIGHUP
+// reload, SIGTERM/SIGINT shutdown) and systemd notification. Its parts live
+// beside it: the RPC method table (daemon/rpc_methods.h, the methods themselves
+// in daemon_rpc.cc), the map service (daemon/map_service.h), the notifier
+// (daemon/sd_notifier.h), status assembly (daemon_status.cc). Time comes from an
+// injected clock, so tests drive Tick() with fake time on a loopback bus.
 #ifndef IRSLAM_DAEMON_IRSLAMD_H_
 #define IRSLAM_DAEMON_IRSLAMD_H_
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
-#include <chrono>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -14,8 +19,12 @@
 #include "robot/robot_core.h"
 #include "daemon/access.h"
 #include "daemon/api_server.h"
-#include "daemon/map_store.h"
+#include "daemon/foreign_commander.h"
+#include "daemon/map_service.h"
 #include "daemon/period_scheduler.h"
+#include "daemon/rpc_methods.h"
+#include "daemon/sd_notifier.h"
+#include "daemon/wall_clock.h"
 #include "drivers/can_bus.h"
 #include "drivers/gpio.h"
 
@@ -27,6 +36,8 @@ struct DaemonOptions {
   std::string config_path;  // empty: built-in defaults
   double time_scale = 1.0;
   ApiLimits limits;
+  std::string notify_socket;   // $NOTIFY_SOCKET ("": no systemd notification)
+  uint64_t watchdog_usec = 0;  // systemd's WatchdogSec (0: no watchdog pings)
   // Test aid (--test-hang-at): the control loop hangs for good at this robot time,
   // so the watchdog's stall detection can be tested. Negative: never.
   double test_hang_at_s = -1;
@@ -34,64 +45,81 @@ struct DaemonOptions {
 
 class Daemon : public ApiServer::Dispatcher {
  public:
-  Daemon(boost::asio::io_context& io, DaemonOptions options, robot::CoreOptions core);
+  Daemon(boost::asio::io_context& io, DaemonOptions options, robot::CoreOptions core,
+         WallClock clock = SystemWallClock());
   ~Daemon() override;
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
 
-  // Opens the bus and the socket; false with a one-line *error.
+  // Opens the bus, GPIO and the socket, loads the saved map; false with a one-line *error.
   bool Open(std::string* error);
-  // Runs until SIGTERM/SIGINT. Returns the process exit status.
+  // Runs until SIGTERM/SIGINT. Returns the process exit status (non-zero when the
+  // final map save failed).
   int Run();
+
+  // One control period at the clock's present time (Run's timer calls it).
+  void Tick();
+  // SIGHUP: re-reads the config file; a bad one changes nothing (one log line).
+  void Reload();
+  // SIGTERM: wheels stopped, outputs off, the final save, everything closed.
+  // Returns the exit status.
+  int Shutdown();
 
   // ApiServer::Dispatcher
   void Handle(const rpc::Request& request, const PeerCred& peer, Reply reply) override;
   bool MaySubscribe(const PeerCred& peer) override;
-  nlohmann::json StatusNotification() override;
+  nlohmann::json StatusNotification() override { return StatusJson(); }
+
+  nlohmann::json StatusJson();
+  const RpcMethodTable& methods() const { return methods_; }
+  const robot::CoreOptions& core_options() const { return core_options_; }
+  const MapService& maps() const { return maps_; }
 
  private:
-  using Clock = std::chrono::steady_clock;
-  double RobotNow() const;
-  double WallNow() const;
+  double WallNow() const { return SecondsBetween(start_, clock_()); }
+  double RobotNow() const { return WallNow() * options_.time_scale; }
+  static int64_t Ns(WallTime t);
+  nlohmann::json LiveMap() const { return core_->Map(); }
+  RpcMethodTable MakeMethods();  // daemon_rpc.cc
+  nlohmann::json Start(const rpc::Request& req);
+  nlohmann::json Stop(const rpc::Request& req);
   void ArmTimer();
-  void OnTick();
   void OnSignal(int signo);
-  void Reload();
-  void Shutdown();
-  nlohmann::json StatusJson();
-  // The synchronous body of Handle.
-  nlohmann::json HandleNow(const rpc::Request& request, const PeerCred& peer);
-  void Notify(const std::string& text);
+  void WaitSignal();
+  void OnFrame(const can_frame& f);
+  void OnStateChange(double now);
+  // A new core with these options; the map service keeps the old core's map.
+  void ApplyOptions(robot::CoreOptions fresh);
+  void ApplyPendingOptions();
   void OnGpioInput(drivers::Gpio::Input input, bool active);
-  // Saves the map (if a mission ran since start) atomically in the state directory.
-  void SaveMap(const char* reason);
   // Drives the GPIO outputs (motor enable, LED) from the core's state.
   void ApplyOutputs(double now);
+  bool OpenAccess(std::string* error);
 
   boost::asio::io_context& io_;
   DaemonOptions options_;
   robot::CoreOptions core_options_;
   std::optional<robot::CoreOptions> pending_options_;
+  WallClock clock_;
+  WallTime start_;
   std::unique_ptr<robot::RobotCore> core_;
   std::unique_ptr<drivers::CanBus> bus_;
   std::unique_ptr<ApiServer> api_;
   std::unique_ptr<drivers::Gpio> gpio_;
   boost::asio::steady_timer timer_;
   boost::asio::signal_set signals_;
-  Clock::time_point start_;
   PeriodScheduler scheduler_;
   double max_work_s_ = 0;
-  uint64_t watchdog_usec_ = 0;
-  double last_watchdog_ = -1e9;
   control::MissionState last_state_ = control::MissionState::kIdle;
   bool running_ = false;
+  int exit_status_ = 0;
   AccessPolicy access_;
-  int notify_fd_ = -1;           // our own non-blocking NOTIFY_SOCKET sender
-  uint64_t notify_dropped_ = 0;  // notifications that did not fit
-  MapStore store_;
-  std::optional<StoredMap> stored_;  // the last map saved or loaded
-  bool mission_ran_ = false;         // a mission ran since start: its map is the one to serve/save
-  uint64_t saves_ = 0, save_errors_ = 0;
-  double last_save_ms_ = 0;
-  std::string store_error_;
+  std::optional<gid_t> socket_gid_;
+  SdNotifier notifier_;
+  WatchdogPacer watchdog_;
+  MapService maps_;
+  ForeignCommanderWatch foreign_;
+  RpcMethodTable methods_;
 };
 
 }  // namespace irslam

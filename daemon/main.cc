@@ -1,8 +1,11 @@
 // irslamd: the irslam navigation daemon (contracts.md §2).
 //   irslamd --can IFACE [--socket PATH] [--config FILE] [--time-scale K]
+#include <systemd/sd-daemon.h>
+
 #include <CLI/CLI.hpp>
 #include <boost/asio/io_context.hpp>
 #include <cstdio>
+#include <cstdlib>
 
 #include "daemon/config.h"
 #include "daemon/irslamd.h"
@@ -58,6 +61,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "irslamd: --can IFACE is required (can0, vcan0 or unix:PATH)\n");
     return 2;
   }
+  // systemd's side: where to notify, and whether (how often) to feed the watchdog.
+  if (const char* notify = std::getenv("NOTIFY_SOCKET")) options.notify_socket = notify;
+  if (sd_watchdog_enabled(0, &options.watchdog_usec) <= 0) options.watchdog_usec = 0;
   boost::asio::io_context io;
   irslam::Daemon daemon(io, options, core);
   if (!daemon.Open(&error)) {

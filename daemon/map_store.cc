@@ -10,8 +10,10 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
-#include <fstream>
-#include <sstream>
+
+#include "daemon/map_validate.h"
+#include "io/file_io.h"
+#include "io/json_text.h"
 
 namespace irslam {
 namespace {
@@ -52,31 +54,49 @@ std::string EncodeMapFile(const StoredMap& m) {
 }
 
 std::optional<StoredMap> DecodeMapFile(const std::string& text, std::string* error) {
-  nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
-  if (j.is_discarded()) {
-    *error = "not valid JSON (torn or corrupt)";
+  std::string why;
+  std::optional<nlohmann::json> parsed = ParseJsonText(text, &why);
+  if (!parsed) {
+    *error = why.rfind("nested", 0) == 0 ? "map file " + why : "not valid JSON (torn or corrupt)";
     return std::nullopt;
   }
-  if (!j.is_object() || j.value("format", "") != kFormat) {
+  nlohmann::json& j = *parsed;
+  const auto is = [&j](const char* key, bool (nlohmann::json::*type)() const noexcept) {
+    return j.contains(key) && (j[key].*type)();
+  };
+  if (!j.is_object() || !is("format", &nlohmann::json::is_string) || j["format"] != kFormat) {
     *error = "not an irslam map file";
     return std::nullopt;
   }
-  if (j.value("version", 0) != kVersion) {
-    *error = "map file version " + std::to_string(j.value("version", 0)) + " is not supported";
+  if (!is("version", &nlohmann::json::is_number_integer)) {
+    *error = "map file version is not an integer";
     return std::nullopt;
   }
-  if (!j.contains("map") || !j["map"].is_object() || !j.contains("crc32") || !j["crc32"].is_string() ||
-      !j.contains("seq") || !j["seq"].is_number_unsigned()) {
+  if (j["version"] != kVersion) {
+    *error = "map file version " + j["version"].dump() + " is not supported";
+    return std::nullopt;
+  }
+  if (!is("map", &nlohmann::json::is_object) || !is("crc32", &nlohmann::json::is_string) ||
+      !is("seq", &nlohmann::json::is_number_unsigned)) {
     *error = "map file lacks map, seq or crc32";
+    return std::nullopt;
+  }
+  // reason is outside the checksum: its type is checked like everything else.
+  if (j.contains("reason") && !j["reason"].is_string()) {
+    *error = "map file reason is not a string";
     return std::nullopt;
   }
   if (Crc32Hex(j["map"].dump()) != j["crc32"].get<std::string>()) {
     *error = "map file checksum does not match (corrupt)";
     return std::nullopt;
   }
+  if (!ValidateMapBody(j["map"], &why)) {
+    *error = "map file content does not check out: " + why;
+    return std::nullopt;
+  }
   StoredMap m;
   m.seq = j["seq"].get<uint64_t>();
-  m.reason = j.value("reason", "");
+  m.reason = j.contains("reason") ? j["reason"].get<std::string>() : "";
   m.map = std::move(j["map"]);
   return m;
 }
@@ -91,12 +111,14 @@ std::optional<StoredMap> MapStore::Load(std::string* error) {
     }
     ::closedir(d);
   }
-  std::ifstream in(path());
-  if (!in) return std::nullopt;  // no map yet
-  std::stringstream ss;
-  ss << in.rdbuf();
-  std::string why;
-  auto m = DecodeMapFile(ss.str(), &why);
+  struct stat st {};
+  if (::lstat(path().c_str(), &st) != 0) {
+    if (errno != ENOENT) *error = Errno("map: cannot read " + path());
+    return std::nullopt;  // ENOENT: no map yet
+  }
+  std::string text, why;
+  std::optional<StoredMap> m;
+  if (ReadRegularFile(path(), kMaxMapFileBytes, &text, &why)) m = DecodeMapFile(text, &why);
   if (!m) {
     const std::string aside = path() + ".corrupt-" + std::to_string(::time(nullptr));
     if (::rename(path().c_str(), aside.c_str()) == 0) {
@@ -114,31 +136,47 @@ bool MapStore::Save(const StoredMap& m, std::string* error) {
     *error = Errno("map: cannot create " + dir_);
     return false;
   }
-  const std::string text = EncodeMapFile(m);
-  const std::string tmp = path() + ".tmp" + std::to_string(::getpid());
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0640);
+  const int dfd = ::open(dir_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dfd < 0) {
+    *error = Errno("map: cannot open " + dir_);
+    return false;
+  }
+  const bool ok = SaveIn(dfd, EncodeMapFile(m), error);
+  ::close(dfd);
+  return ok;
+}
+
+bool MapStore::SaveIn(int dfd, const std::string& text, std::string* error) {
+  const std::string name = "map.json.tmp" + std::to_string(::getpid());
+  const std::string tmp = dir_ + "/" + name;
+  // Created here and now, never an existing file or a symlink's target; a leftover
+  // of that name (a crash, or something planted) is removed first, not followed.
+  constexpr int kFlags = O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC;
+  int fd = ::openat(dfd, name.c_str(), kFlags, 0640);
+  if (fd < 0 && errno == EEXIST && ::unlinkat(dfd, name.c_str(), 0) == 0) {
+    fd = ::openat(dfd, name.c_str(), kFlags, 0640);
+  }
   if (fd < 0) {
-    *error = Errno("map: cannot write " + tmp);
+    *error = Errno("map: cannot create " + tmp);
     return false;
   }
   if (!WriteAll(fd, text) || ::fsync(fd) != 0) {
     *error = Errno("map: cannot write " + tmp);
     ::close(fd);
-    ::unlink(tmp.c_str());
+    ::unlinkat(dfd, name.c_str(), 0);
     return false;
   }
-  ::close(fd);
-  if (::rename(tmp.c_str(), path().c_str()) != 0) {
+  if (::close(fd) != 0) {
+    *error = Errno("map: cannot write " + tmp);
+    ::unlinkat(dfd, name.c_str(), 0);
+    return false;
+  }
+  if (::renameat(dfd, name.c_str(), dfd, "map.json") != 0) {
     *error = Errno("map: cannot rename " + tmp + " to " + path());
-    ::unlink(tmp.c_str());
+    ::unlinkat(dfd, name.c_str(), 0);
     return false;
   }
-  // The rename itself must reach the disk too.
-  const int dfd = ::open(dir_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dfd >= 0) {
-    ::fsync(dfd);
-    ::close(dfd);
-  }
+  ::fsync(dfd);  // the rename itself must reach the disk too
   return true;
 }
 

@@ -91,6 +91,12 @@ void RobotCore::OnSafetyInput(SafetyInput input, bool active, double now_s) {
   }
 }
 
+void RobotCore::LatchFault(double now_s, const std::string& reason) {
+  fault_latched_ = true;
+  mission_.SetFault(now_s, reason);
+  last_cmd_ = {};
+}
+
 bool RobotCore::MotorEnable() const {
   if (estop_latched_ || estop_.active()) return false;
   switch (mission_.state()) {
@@ -115,8 +121,8 @@ std::vector<can_frame> RobotCore::Tick(double now_s) {
   if (estop_latched_ && estop_was_pressed && !estop_.Poll(now_s)) {  // debounced release
     mission_.SetFault(now_s, "emergency stop released: start to resume");
   }
-  if (estop_latched_) {
-    // Only start clears an emergency stop.
+  if (estop_latched_ || fault_latched_) {
+    // Only start clears an emergency stop (or a latched fault).
   } else if (!alive && active && mission_.state() != MissionState::kFault) {
     mission_.SetFault(now_s, std::string("controller lost: ") + motor_.LossReason(now_s));
   } else if (alive && mission_.state() == MissionState::kFault) {
@@ -142,9 +148,10 @@ bool RobotCore::Start(double now_s, std::string* why) {
     *why = std::string("controller not reachable: ") + motor_.LossReason(now_s);
     return false;
   }
-  if (estop_latched_) {
+  if (estop_latched_ || fault_latched_) {
     // Released and started again: carry on from where the stop came (SLAM kept).
     estop_latched_ = false;
+    fault_latched_ = false;
     mission_.ClearFault(now_s);
     if (mission_.state() != MissionState::kIdle && mission_.state() != MissionState::kDone) return true;
   }

@@ -76,6 +76,10 @@ class RobotCore {
   // dropped; it stays latched until released and start is called again.
   enum class SafetyInput { kEstop, kBumperLeft, kBumperRight };
   void OnSafetyInput(SafetyInput input, bool active, double now_s);
+  // A fault found outside the core (the daemon saw a second controller client on
+  // the bus): wheels zero, state fault with this reason, latched like the
+  // emergency stop until start is called again.
+  void LatchFault(double now_s, const std::string& reason);
   // The outputs: motor-driver enable (only while driving is allowed) and the LED.
   bool MotorEnable() const;
   bool StatusLed(double now_s) const;
@@ -106,6 +110,7 @@ class RobotCore {
   uint64_t bumper_unconfirmed_ = 0;
   Debouncer estop_, bump_left_, bump_right_;
   bool estop_latched_ = false;
+  bool fault_latched_ = false;  // LatchFault
   double last_heartbeat_ = -1e9;
   WheelCommand last_cmd_;
 };

@@ -3,7 +3,7 @@
 # AddressSanitizer + UndefinedBehaviorSanitizer): JSON-RPC request lines, whole
 # API sessions (many lines on one connection through the real server), CAN
 # frames (through the decoder, the controller client and the whole core), world
-# files and config files. Each runs SECONDS (default 60) from its committed seed
+# files, config files and the daemon's saved-map files. Each runs SECONDS (default 60) from its committed seed
 # corpus in tests/fuzz/corpus/<name>/; any crash fails (exit 1) and leaves its
 # input in build-fuzz/artifacts/.
 #   vcan-scripts/fuzz.sh [SECONDS] [TARGET...]
@@ -12,7 +12,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 seconds=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(jsonrpc api_session can world config)
+[ ${#targets[@]} -gt 0 ] || targets=(jsonrpc api_session can world config map)
 
 bash "$IRSLAM_ROOT/vcan-scripts/install-deps.sh" --fuzz
 build=$IRSLAM_ROOT/build-fuzz

@@ -1,0 +1,84 @@
+// The map service: owns the saved map (daemon/map_store.h) and decides what the
+// `map` method serves and what gets saved, and when.
+//
+// Serves: the live core's map once a mission ran on it; else the map kept from a
+// core that a reload replaced; else the map saved by the previous run (with a
+// "saved" member); else the (empty) live map.
+//
+// Saves (reason "model", "stop", "shutdown", "reload") write the same candidate,
+// and never:
+//   - when nothing ran (no mission since start, or since a reload replaced the
+//     core and its map was kept): the saved map stays as it is; a reload never
+//     makes an empty map the one served or saved;
+//   - a map identical to the last one saved ("unchanged": a `stop` storm writes
+//     the SD card once);
+//   - more often than once per min_interval_s, except the final save at shutdown:
+//     a save asked for sooner is "deferred" and done by Poll() when its time comes.
+// A save that fails is reported (Save's result, status.map_store.error, the log).
+#ifndef IRSLAM_DAEMON_MAP_SERVICE_H_
+#define IRSLAM_DAEMON_MAP_SERVICE_H_
+
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+
+#include "daemon/map_store.h"
+#include "daemon/wall_clock.h"
+
+namespace irslam {
+
+enum class SaveResult { kSaved, kUnchanged, kNothing, kDeferred, kFailed };
+const char* ToString(SaveResult r);
+
+class MapService {
+ public:
+  using MapSource = std::function<nlohmann::json()>;  // the live core's map, built on demand
+  static constexpr double kDefaultMinIntervalS = 5.0;
+
+  MapService(std::string state_dir, WallClock clock, double min_interval_s = kDefaultMinIntervalS);
+
+  // At start: reads the previous run's map (a bad file is moved aside and logged).
+  void Load();
+  // A mission started on the live core: from now on its map is the one to serve and save.
+  void OnMissionStarted() { live_ran_ = true; }
+  // The core is about to be replaced (a reload): its map, if a mission made one, is
+  // saved now if it was not yet (ignoring the rate limit) and served until a
+  // mission starts on the new core.
+  void OnCoreReplaced(const nlohmann::json& old_map);
+
+  nlohmann::json Serve(const MapSource& live) const;
+  // final: the save at shutdown (not rate-limited).
+  SaveResult Save(const char* reason, const MapSource& live, bool final = false);
+  // Once per control period: a deferred save whose time has come is done now.
+  void Poll(const MapSource& live);
+
+  bool has_live_map() const { return live_ran_; }
+  bool save_pending() const { return pending_reason_.has_value(); }
+  const std::string& error() const { return error_; }
+  const std::optional<StoredMap>& stored() const { return stored_; }
+  const std::string& path() const { return path_; }
+  nlohmann::json StatusJson() const;
+
+ private:
+  SaveResult Write(const char* reason, nlohmann::json map);
+  double Now() const { return SecondsBetween(WallTime{}, clock_()); }
+
+  MapStore store_;
+  std::string path_;
+  WallClock clock_;
+  double min_interval_s_;
+  std::optional<StoredMap> stored_;   // the last map saved or loaded
+  std::optional<nlohmann::json> held_;  // kept from a replaced core
+  bool live_ran_ = false;              // a mission ran on the live core
+  std::optional<std::string> pending_reason_;  // a deferred save
+  double last_write_s_ = -1e18;
+  uint64_t saves_ = 0, save_errors_ = 0, unchanged_ = 0, deferred_ = 0;
+  double last_save_ms_ = 0;
+  SaveResult last_result_ = SaveResult::kNothing;
+  std::string error_;
+};
+
+}  // namespace irslam
+
+#endif  // IRSLAM_DAEMON_MAP_SERVICE_H_

@@ -1,0 +1,175 @@
+// The daemon with a mission: a Daemon and the simulated controller
+// (sim/sim_controller.h) on one loopback bus in a temp directory, both driven by
+// the same fake clock (20 ms per period), no processes. Issue 12's map-losing
+// and save-failure defects, at the level of the daemon's own methods.
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <boost/asio/io_context.hpp>
+#include <filesystem>
+#include <fstream>
+
+#include "daemon/irslamd.h"
+#include "sim/sim_run.h"
+#include "tests/testing/process.h"
+#include "tests/testing/worlds.h"
+
+namespace irslam {
+namespace {
+
+class DaemonMissionTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = testing::MakeTempDir();
+    options_.can_iface = "unix:" + dir_ + "/bus";
+    options_.socket_path = dir_ + "/irslamd.sock";
+    options_.config_path = dir_ + "/irslamd.conf";
+    std::ofstream(options_.config_path) << "{}";
+    core_ = robot::DefaultCoreOptions();
+    core_.state_dir = dir_ + "/state";
+  }
+  void TearDown() override {
+    daemon_.reset();
+    std::filesystem::remove_all(dir_);
+  }
+  void Open() {
+    daemon_ = std::make_unique<Daemon>(io_, options_, core_, [this] { return now_; });
+    std::string error;
+    ASSERT_TRUE(daemon_->Open(&error)) << error;
+    sim_ = std::make_unique<sim::SimController>(testing::LoadTestWorld("wall_follow_fig14"),
+                                                sim::SimOptionsFrom(core_), 1);
+    controller_ = drivers::OpenCanBus(sim_io_, {options_.can_iface, {}}, &error);
+    ASSERT_TRUE(controller_) << error;
+    controller_->Start([this](const can_frame& f, double) { sim_->HandleFrame(f); });
+  }
+  // Delivers what is in flight both ways (datagrams arrive synchronously).
+  void Pump() {
+    for (int i = 0; i < 4; ++i) {
+      io_.poll();
+      io_.restart();
+      sim_io_.poll();
+      sim_io_.restart();
+    }
+  }
+  // Runs the controller and the daemon for robot_s seconds of robot time.
+  void Run(double robot_s) {
+    const int periods = static_cast<int>(robot_s / 0.02 + 0.5);
+    for (int i = 0; i < periods; ++i) {
+      now_ += std::chrono::milliseconds(20);
+      t_ += 0.02;
+      std::vector<can_frame> out;
+      sim_->AdvanceTo(t_, &out);
+      for (const auto& f : out) controller_->Send(f);
+      Pump();
+      daemon_->Tick();
+      Pump();
+    }
+  }
+  nlohmann::json Call(const std::string& method) {
+    rpc::Request r;
+    r.id = 1;
+    r.method = method;
+    PeerCred self;
+    self.uid = ::getuid();
+    self.gid = ::getgid();
+    self.groups = {::getgid()};
+    nlohmann::json reply;
+    daemon_->Handle(r, self, [&reply](nlohmann::json j) { reply = std::move(j); });
+    return reply;
+  }
+  size_t MapLines() { return Call("map")["result"]["lines"].size(); }
+
+  std::string dir_;
+  DaemonOptions options_;
+  robot::CoreOptions core_;
+  WallTime now_ = WallTime(std::chrono::hours(100));
+  double t_ = 0;
+  boost::asio::io_context io_, sim_io_;
+  std::unique_ptr<Daemon> daemon_;
+  std::unique_ptr<sim::SimController> sim_;
+  std::unique_ptr<drivers::CanBus> controller_;
+};
+
+// Issue 12 B1: SIGHUP after a mission replaced the core: `map` served an empty
+// map, and the next stop or SIGTERM saved it over the mission's map.
+TEST_F(DaemonMissionTest, AReloadAfterAMissionNeitherServesNorSavesAnEmptyMap) {
+  Open();
+  Run(1);
+  ASSERT_EQ(daemon_->StatusJson()["controller"]["alive"], true);
+  const auto started = Call("start");
+  ASSERT_TRUE(started.contains("result")) << started;
+  Run(15);
+  const auto stop = Call("stop");
+  ASSERT_TRUE(stop.contains("result")) << stop;
+  EXPECT_EQ(stop["result"]["map"], "saved");
+  const size_t lines = MapLines();
+  ASSERT_GT(lines, 0u);
+  std::ofstream(options_.config_path) << R"({"control": {"period_s": 0.01}})";
+  daemon_->Reload();
+  EXPECT_DOUBLE_EQ(daemon_->StatusJson()["period"]["target"].get<double>(), 0.01);  // idle: at once
+  Run(1);
+  EXPECT_EQ(MapLines(), lines);
+  EXPECT_EQ(daemon_->StatusJson()["lines"], 0);  // the new core's own SLAM starts afresh
+  EXPECT_EQ(Call("stop")["result"]["map"], "unchanged");
+  EXPECT_EQ(daemon_->Shutdown(), 0);
+  std::string error;
+  auto saved = MapStore(core_.state_dir).Load(&error);
+  ASSERT_TRUE(saved) << error;
+  EXPECT_EQ(saved->seq, 1u);
+  EXPECT_EQ(saved->map["lines"].size(), lines);
+}
+
+// A config that comes during a mission applies when it ends (the mission's map
+// kept and served); the next start, on the new core, works at once.
+TEST_F(DaemonMissionTest, AConfigDuringAMissionAppliesWhenItEndsAndTheMapIsKept) {
+  Open();
+  Run(1);
+  ASSERT_TRUE(Call("start").contains("result"));
+  Run(10);
+  std::ofstream(options_.config_path) << R"({"control": {"period_s": 0.01}})";
+  daemon_->Reload();
+  EXPECT_EQ(daemon_->StatusJson()["config_pending"], true);
+  EXPECT_DOUBLE_EQ(daemon_->StatusJson()["period"]["target"].get<double>(), 0.02);
+  Run(2);
+  const size_t lines = MapLines();
+  ASSERT_GT(lines, 0u);
+  ASSERT_TRUE(Call("stop").contains("result"));
+  Run(1);
+  EXPECT_EQ(daemon_->StatusJson()["config_pending"], false);
+  EXPECT_DOUBLE_EQ(daemon_->StatusJson()["period"]["target"].get<double>(), 0.01);
+  EXPECT_GE(MapLines(), lines);
+  const auto start = Call("start");
+  EXPECT_TRUE(start.contains("result")) << start;
+  EXPECT_EQ(daemon_->StatusJson()["state"], "wall_follow");
+}
+
+// Issue 12 B2: a failed save still answered stop with success, and SIGTERM exited 0.
+TEST_F(DaemonMissionTest, AFailedSaveMakesStopAnErrorAndShutdownNonZero) {
+  std::ofstream(dir_ + "/plain-file") << "x";
+  core_.state_dir = dir_ + "/plain-file/state";  // cannot be created, even by root
+  Open();
+  Run(1);
+  ASSERT_TRUE(Call("start").contains("result"));
+  Run(5);
+  ::testing::internal::CaptureStderr();
+  const auto stop = Call("stop");
+  ::testing::internal::GetCapturedStderr();
+  ASSERT_TRUE(stop.contains("error")) << stop;
+  EXPECT_EQ(stop["error"]["code"], rpc::kMapNotSaved);
+  EXPECT_EQ(stop["error"]["message"].get<std::string>().rfind(
+                "stopped, but the map was not saved: map: cannot create " + core_.state_dir + ": ", 0),
+            0u)
+      << stop;
+  const auto s = daemon_->StatusJson();
+  EXPECT_EQ(s["state"], "idle");  // the wheels stopped all the same
+  EXPECT_EQ(s["map_store"]["save_errors"], 1);
+  EXPECT_NE(s["map_store"]["error"], "");
+  ::testing::internal::CaptureStderr();
+  EXPECT_EQ(daemon_->Shutdown(), 1);
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  EXPECT_NE(log.find("the final map save failed: exit status 1"), std::string::npos) << log;
+}
+
+}  // namespace
+}  // namespace irslam
