@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "daemon/config.h"
+#include "daemon/core_json.h"
 #include "proto/codec.h"
 
 namespace irslam {
@@ -106,7 +107,7 @@ void Daemon::SaveMap(const char* reason) {
   StoredMap m;
   m.seq = (stored_ ? stored_->seq : 0) + 1;
   m.reason = reason;
-  m.map = core_->Map();
+  m.map = ToJson(core_->Map());
   const auto t0 = Clock::now();
   std::string error;
   if (store_.Save(m, &error)) {
@@ -189,7 +190,7 @@ void Daemon::OnTick() {
     if (last_state_ == control::MissionState::kModel) SaveMap("model");
     last_state_ = core_->state();
     std::fprintf(stderr, "<6>irslamd: state=%s reason=\"%s\"\n", control::ToString(last_state_),
-                 core_->Status(now)["reason"].get<std::string>().c_str());
+                 core_->Status(now).mission.reason.c_str());
     Notify(std::string("STATUS=state=") + control::ToString(last_state_));
   }
   // The watchdog is fed from the loop itself, so a stalled loop is noticed.
@@ -264,7 +265,7 @@ void Daemon::Reload() {
 
 nlohmann::json Daemon::StatusJson() {
   const double now = RobotNow();
-  nlohmann::json s = core_->Status(now);
+  nlohmann::json s = ToJson(core_->Status(now));
   s["uptime"] = WallNow();
   s["time_scale"] = options_.time_scale;
   s["period"] = {{"target", core_options_.period_s},
@@ -328,7 +329,7 @@ nlohmann::json Daemon::Handle(const rpc::Request& req, const PeerCred& peer) {
       m["saved"] = {{"seq", stored_->seq}, {"reason", stored_->reason}, {"path", store_.path()}};
       return rpc::MakeResult(req.id, m);
     }
-    return rpc::MakeResult(req.id, core_->Map());
+    return rpc::MakeResult(req.id, ToJson(core_->Map()));
   }
   if (req.method == "start") {
     const auto s = core_->state();
