@@ -1,18 +1,14 @@
 // The safety lines of the robot (GPIO: emergency stop, bumpers, motor-driver enable,
-// status LED) as pure logic: debouncing, the LED pattern per state, and their
-// settings. drivers/gpio owns the lines; RobotCore decides what they mean.
+// status LED) as pure logic: debouncing and the LED pattern per state. The lines
+// and their settings are drivers/gpio's; RobotCore decides what they mean.
 #ifndef IRSLAM_CONTROL_SAFETY_H_
 #define IRSLAM_CONTROL_SAFETY_H_
 
 #include <optional>
 
 #include "control/mission.h"
-#include "drivers/gpio_settings.h"
 
 namespace irslam::control {
-
-using drivers::GpioLineSpec;
-using drivers::GpioSettings;
 
 // A switch input, debounced the safe way: an activation acts at once (an
 // emergency stop or a bump must not wait), a release only once the input has

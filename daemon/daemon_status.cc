@@ -30,7 +30,7 @@ nlohmann::json GpioJson(const drivers::Gpio& gpio) {
 
 nlohmann::json Daemon::StatusJson() {
   const double now = RobotNow();
-  nlohmann::json s = core_->Status(now);
+  nlohmann::json s = ToJson(core_->Status(now));
   s["uptime"] = WallNow();
   s["time_scale"] = options_.time_scale;
   s["period"] = {{"target", core_options_.period_s},

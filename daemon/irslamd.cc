@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "daemon/config.h"
+#include "daemon/core_json.h"
 #include "proto/codec.h"
 
 namespace irslam {
@@ -154,7 +155,7 @@ void Daemon::OnStateChange(double now) {
   if (last_state_ == control::MissionState::kModel) maps_.Save("model", [this] { return LiveMap(); });
   last_state_ = core_->state();
   std::fprintf(stderr, "<6>irslamd: state=%s reason=\"%s\"\n", control::ToString(last_state_),
-               core_->Status(now)["reason"].get<std::string>().c_str());
+               core_->Status(now).mission.reason.c_str());
   notifier_.Send(std::string("STATUS=state=") + control::ToString(last_state_));
   // A config that came during the mission: the new core hears the controller
   // before the next start.

@@ -19,6 +19,7 @@
 #include "robot/robot_core.h"
 #include "daemon/access.h"
 #include "daemon/api_server.h"
+#include "daemon/core_json.h"
 #include "daemon/foreign_commander.h"
 #include "daemon/map_service.h"
 #include "daemon/period_scheduler.h"
@@ -79,7 +80,7 @@ class Daemon : public ApiServer::Dispatcher {
   double WallNow() const { return SecondsBetween(start_, clock_()); }
   double RobotNow() const { return WallNow() * options_.time_scale; }
   static int64_t Ns(WallTime t);
-  nlohmann::json LiveMap() const { return core_->Map(); }
+  nlohmann::json LiveMap() const { return ToJson(core_->Map()); }
   RpcMethodTable MakeMethods();  // daemon_rpc.cc
   nlohmann::json Start(const rpc::Request& req);
   nlohmann::json Stop(const rpc::Request& req);

@@ -24,7 +24,7 @@ struct IrCalibrationOptions {
       {0.70, 0.87}, {0.80, 0.79}, {1.00, 0.69}, {1.20, 0.55}, {1.50, 0.45}};
   double min_range_m = 0.20;
   double max_range_m = 1.20;
-  // Plausibility (RobotCore): outputs outside [plausible_min_v, plausible_max_v]
+  // Plausibility (drivers/ir_conditioner.h): outputs outside [plausible_min_v, plausible_max_v]
   // are a sensor fault (the Sharp output never exceeds ~3 V nor drops to 0 V);
   // the same raw count stuck_samples times in a row is a stuck sensor (0 = off).
   double plausible_min_v = 0.05;

@@ -104,6 +104,14 @@ std::optional<double> MotorClient::ControllerTime(uint16_t stamp_ms, double now_
   return static_cast<double>(clock_.Update(stamp_ms)) * 1e-3;
 }
 
+void MotorClient::ConfirmBumpers(uint8_t raw) {
+  bumpers_ = raw & last_status_bumpers_;
+  const auto new_bits = static_cast<uint8_t>(last_status_bumpers_ & ~bumpers_before_);
+  if (new_bits & ~raw) ++counters_.bumper_unconfirmed;  // set in one frame only
+  bumpers_before_ = last_status_bumpers_;
+  last_status_bumpers_ = raw;
+}
+
 void MotorClient::CheckSeq(std::optional<uint8_t>* last, uint8_t seq, uint64_t* gaps) {
   if (last->has_value() && static_cast<uint8_t>(**last + 1) != seq) ++*gaps;
   *last = seq;
@@ -203,7 +211,9 @@ MotorClient::Event MotorClient::Handle(const can_frame& frame, double now_s) {
     if (!t || !ordered(*t, &last_status_t_)) return ev;
     CheckSeq(&seq_status_, s->seq, &counters_.seq_gap_status);
     last_status_ = *s;
+    ConfirmBumpers(s->bumpers);
     ev.status = *s;
+    ev.bumpers = bumpers_;
   } else {
     ++counters_.ignored;
   }

@@ -1,6 +1,6 @@
 // Client side of the motor controller protocol (proto/irslam.dbc), as pure code:
-// frames in, timestamped wheel ticks / IR samples / controller status out, and
-// command frames built on request. No socket or clock inside: the caller passes
+// frames in, timestamped wheel ticks / IR samples / controller status (with its
+// bumper bits confirmed) out, and command frames built on request. No socket or clock inside: the caller passes
 // its own notion of "now" (robot seconds) for timeout detection.
 #ifndef IRSLAM_DRIVERS_MOTOR_CLIENT_H_
 #define IRSLAM_DRIVERS_MOTOR_CLIENT_H_
@@ -80,6 +80,7 @@ struct MotorClientCounters {
   uint64_t implausible_time = 0;    // a time stamp far from where the controller's clock is
   uint64_t implausible_counts = 0;  // a count jump impossible at the maximum wheel speed
   uint64_t clock_jumps = 0;         // the controller's clock re-anchored forward
+  uint64_t bumper_unconfirmed = 0;  // a CTRL_STATUS bumper bit set in one frame only
 };
 
 struct MotorClientOptions {
@@ -102,6 +103,8 @@ class MotorClient {
     std::optional<std::array<uint16_t, kNumIrSensors>> ir_adc;
     double ir_t = 0;
     std::optional<proto::ControllerStatus> status;
+    // With status: the bumper bits confirmed so far (see bumpers()).
+    std::optional<uint8_t> bumpers;
   };
 
   explicit MotorClient(MotorClientOptions options) : options_(options) {}
@@ -119,6 +122,11 @@ class MotorClient {
 
   const MotorClientCounters& counters() const { return counters_; }
   const std::optional<proto::ControllerStatus>& last_status() const { return last_status_; }
+  // The controller's bumper bits (kBumperLeft, kBumperRight) that count: a bit
+  // counts when two CTRL_STATUS frames in a row (50 ms apart) carry it. A real
+  // contact lasts (the robot is stopped against the obstacle); a flipped bit does
+  // not, and is counted (bumper_unconfirmed).
+  uint8_t bumpers() const { return bumpers_; }
 
  private:
   // The controller time of a stamp in seconds, or nullopt when the stamp is
@@ -126,6 +134,7 @@ class MotorClient {
   std::optional<double> ControllerTime(uint16_t stamp_ms, double now_s);
   static constexpr int kConfirm = 3;
   void CheckSeq(std::optional<uint8_t>* last, uint8_t seq, uint64_t* gaps);
+  void ConfirmBumpers(uint8_t raw);
 
   MotorClientOptions options_;
   MotorClientCounters counters_;
@@ -135,6 +144,8 @@ class MotorClient {
   std::optional<uint8_t> seq_encoder_, seq_ir_, seq_status_;
   std::optional<proto::IrA> pending_ir_a_;
   std::optional<proto::ControllerStatus> last_status_;
+  uint8_t bumpers_ = 0;  // confirmed
+  uint8_t last_status_bumpers_ = 0, bumpers_before_ = 0;  // raw, of the last two status frames
   double host_at_clock_ = 0;                 // host time when the clock last advanced
   std::optional<uint16_t> suspect_stamp_;    // the last implausible stamp ...
   int suspects_ = 0;                         // ... and how many agreeing ones in a row

@@ -1,32 +1,38 @@
 // RobotCore: everything irslamd does between the CAN socket and the API, as pure
-// code. Frames in (with the host's robot time), frames out once per control
-// period, status and map as JSON values. The daemon drives it from its event
-// loop; `irslam-sim run` drives the very same object in process.
+// code (no fd, clock or file), and nothing but the orchestration of it: frames
+// in -> the motor-controller client (drivers/motor_client.h) -> IR conditioning
+// (drivers/ir_conditioner.h) -> SLAM -> the mission -> the safety latches ->
+// frames out once per control period. Status and map come out as typed values
+// (robot/status.h); their JSON views are the daemon's (daemon/core_json.h). The
+// daemon drives it from its event loop; `irslam-sim run` drives the very same
+// object in process.
 #ifndef IRSLAM_ROBOT_ROBOT_CORE_H_
 #define IRSLAM_ROBOT_ROBOT_CORE_H_
 
 #include <linux/can.h>
 
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "control/mission.h"
 #include "control/safety.h"
+#include "drivers/gpio_settings.h"
 #include "drivers/ir_calibration.h"
+#include "drivers/ir_conditioner.h"
 #include "drivers/motor_client.h"
+#include "robot/status.h"
 #include "slam/slam.h"
 
 namespace irslam::robot {
 
 using control::Debouncer;
 using control::ExploreOptions;
-using control::GpioSettings;
 using control::Mission;
 using control::MissionOptions;
 using control::MissionState;
 using control::ModelOptions;
 using control::WallFollowerOptions;
+using drivers::GpioSettings;
 
 // The control socket's settings (config section [api]; used by irslamd only).
 struct ApiSettings {
@@ -85,29 +91,26 @@ class RobotCore {
   bool StatusLed(double now_s) const;
   bool estop_latched() const { return estop_latched_; }
 
-  nlohmann::json Status(double now_s) const;
-  nlohmann::json Map() const;
+  CoreStatus Status(double now_s) const;
+  MapSnapshot Map() const;
 
   MissionState state() const { return mission_.state(); }
   const slam::Slam& slam() const { return slam_; }
   const drivers::MotorClient& motor() const { return motor_; }
+  const drivers::IrConditioner& ir() const { return ir_; }
   const WheelCommand& last_command() const { return last_cmd_; }
   const std::vector<double>& loop_times() const { return mission_.loop_times(); }
   const CoreOptions& options() const { return options_; }
 
  private:
+  // The controller is lost or back, the e-stop released: the mission's fault follows.
+  void UpdateFault(double now_s);
+
   CoreOptions options_;
   drivers::MotorClient motor_;
-  drivers::IrCalibration calibration_;
+  drivers::IrConditioner ir_;
   slam::Slam slam_;
   Mission mission_;
-  RangeScan scan_;
-  std::array<uint16_t, kNumIrSensors> last_adc_{};
-  std::array<int, kNumIrSensors> same_adc_{};  // samples in a row with the same raw value
-  uint64_t ir_out_of_range_ = 0, ir_stuck_ = 0;
-  uint8_t bumpers_ = 0;       // from CTRL_STATUS, confirmed by two frames in a row
-  uint8_t last_status_bumpers_ = 0, bumpers_before_ = 0;
-  uint64_t bumper_unconfirmed_ = 0;
   Debouncer estop_, bump_left_, bump_right_;
   bool estop_latched_ = false;
   bool fault_latched_ = false;  // LatchFault

@@ -13,6 +13,7 @@
 
 #include "robot/robot_core.h"
 #include "daemon/config.h"
+#include "daemon/core_json.h"
 #include "daemon/map_svg.h"
 #include "drivers/can_bus.h"
 #include "proto/codec.h"
@@ -113,7 +114,7 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
   int windows_seen = 0;
   auto record = [&](const InProcessRun& r) {
     if (events_file.is_open()) {
-      const auto st = r.core->Status(r.t);
+      const auto st = ToJson(r.core->Status(r.t));
       const std::string key = st["state"].dump() + st["reason"].dump() + st["behaviour"].dump();
       if (key != last_event) {
         last_event = key;
@@ -148,7 +149,7 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
   const SimController& sim = *run.sim;
   const robot::RobotCore& core = *run.core;
   const double t = run.t;
-  if (!WriteJson(map_out, core.Map())) {
+  if (!WriteJson(map_out, ToJson(core.Map()))) {
     std::fprintf(stderr, "irslam-sim: cannot write %s\n", map_out.c_str());
     return 1;
   }
@@ -162,13 +163,13 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
     std::string error;
     auto world_json = ParseJsonText(ReadText(c.world_path), &error);
     std::ofstream svg(svg_out);
-    svg << RenderMapSvg(core.Map(), sim.Truth(), world_json.value_or(nlohmann::json()));
+    svg << RenderMapSvg(ToJson(core.Map()), sim.Truth(), world_json.value_or(nlohmann::json()));
     if (!svg) {
       std::fprintf(stderr, "irslam-sim: cannot write %s\n", svg_out.c_str());
       return 1;
     }
   }
-  const auto status = core.Status(t);
+  const auto status = ToJson(core.Status(t));
   std::fprintf(stderr,
                "irslam-sim: %s after %.1f s robot time, %.1f m driven, %llu collisions, "
                "min clearance %.3f m\n",

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "daemon/core_json.h"
 #include "robot/robot_core.h"
 #include "proto/codec.h"
 
@@ -27,7 +28,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       (void)core.Tick(t);
     }
   }
-  (void)core.Status(t).dump();
-  (void)core.Map().dump();
+  (void)irslam::ToJson(core.Status(t)).dump();
+  (void)irslam::ToJson(core.Map()).dump();
   return 0;
 }

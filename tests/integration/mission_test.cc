@@ -4,6 +4,7 @@
 
 #include <map>
 
+#include "daemon/core_json.h"
 #include "robot/robot_core.h"
 #include "sim/sim_run.h"
 #include "tests/testing/worlds.h"
@@ -27,7 +28,7 @@ TEST_P(PaperWorldTest, ReachesDoneFindingAndClassifyingEveryPieceWithoutTouching
     EXPECT_EQ(run.core->state(), control::MissionState::kDone) << "seed " << seed;
     EXPECT_LT(run.t, kLimitS);
     EXPECT_EQ(run.sim->collisions(), 0u) << "seed " << seed;
-    const auto sc = metrics::ScoreObjects(run.core->Map(), run.core->slam(), world);
+    const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world);
     EXPECT_EQ(sc.found, sc.pieces) << "seed " << seed;
     EXPECT_EQ(sc.kind_right, sc.pieces) << "seed " << seed;
     EXPECT_EQ(sc.complete, sc.pieces) << "seed " << seed;
@@ -37,7 +38,7 @@ TEST_P(PaperWorldTest, ReachesDoneFindingAndClassifyingEveryPieceWithoutTouching
     // docs/accuracy.md).
     EXPECT_LE(sc.max_edge_m, 0.05) << "seed " << seed;
     // The map's objects all carry the contract's fields.
-    const nlohmann::json map = run.core->Map();
+    const nlohmann::json map = ToJson(run.core->Map());
     for (const auto& o : map["objects"]) {
       EXPECT_TRUE(o["kind"] == "free" || o["kind"] == "wall_contact");
       EXPECT_EQ(o["box"].size(), 4u);
@@ -55,7 +56,7 @@ TEST(RobustnessTest, ObjectTooCloseToAWallIsNotClaimedAsACompleteFreeObject) {
   EXPECT_EQ(run.sim->collisions(), 0u);
   // The box 0.25 m from the top wall (narrower than the robot) is modelled as
   // wall-contact or left incomplete, never as a complete free object.
-  const auto map = run.core->Map();
+  const auto map = ToJson(run.core->Map());
   const double rot = run.core->slam().map_rotation();
   bool seen = false;
   for (const auto& o : map["objects"]) {
@@ -79,7 +80,7 @@ TEST(RobustnessTest, StartFacingACornerOrBesideAFreeObjectStillFinishes) {
     EXPECT_EQ(run.core->state(), control::MissionState::kDone) << name;
     // A box corner between two front beams is found by the bumper at most once.
     EXPECT_LE(run.sim->collisions(), 1u) << name;
-    const auto sc = metrics::ScoreObjects(run.core->Map(), run.core->slam(), world);
+    const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world);
     EXPECT_EQ(sc.found, sc.pieces) << name;
     EXPECT_EQ(sc.complete, sc.pieces) << name;
   }
@@ -110,7 +111,7 @@ TEST(RobustnessTest, ChairLegsNeitherTrapTheRobotNorBecomeFurniture) {
   }
   for (const auto& [object, n] : hits) EXPECT_EQ(n, 1) << "object " << object << " was hit " << n << " times";
   // No object is made of the legs (each is far shorter than the 0.3 m minimum line).
-  const auto map = run.core->Map();
+  const auto map = ToJson(run.core->Map());
   for (const auto& o : map["objects"]) {
     const double w = o["box"][2].get<double>() - o["box"][0].get<double>();
     const double h = o["box"][3].get<double>() - o["box"][1].get<double>();
@@ -141,12 +142,12 @@ TEST(FaultRunTest, MissionEndsDoneThroughLossCorruptionReorderingAndGlitches) {
         sim::RunInProcess(world, robot::DefaultCoreOptions(), seed, kLimitS, nullptr, &*faults);
     EXPECT_EQ(run.core->state(), control::MissionState::kDone) << "seed " << seed;
     EXPECT_EQ(run.sim->collisions(), 0u) << "seed " << seed;
-    const auto sc = metrics::ScoreObjects(run.core->Map(), run.core->slam(), world);
+    const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world);
     EXPECT_EQ(sc.found, sc.pieces) << "seed " << seed;
     EXPECT_EQ(sc.kind_right, sc.pieces) << "seed " << seed;
     EXPECT_EQ(sc.complete, sc.pieces) << "seed " << seed;
     EXPECT_LE(sc.max_edge_m, 0.06) << "seed " << seed;
-    const nlohmann::json status = run.core->Status(run.t);
+    const nlohmann::json status = ToJson(run.core->Status(run.t));
     const auto& f = status["frames"];
     const auto& injected = run.faults->counters();
     EXPECT_GT(injected.duplicated, 500u);
@@ -176,14 +177,14 @@ TEST(FaultRunTest, ABoxTheWallFollowingLoopMissedIsFoundByALaterSurvey) {
   const sim::World world = testing::LoadTestWorld("fig14");
   sim::InProcessRun run = sim::RunInProcess(world, robot::DefaultCoreOptions(), 4, 900, nullptr, &*faults);
   EXPECT_EQ(run.core->state(), control::MissionState::kDone);
-  const auto sc = metrics::ScoreObjects(run.core->Map(), run.core->slam(), world);
+  const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world);
   EXPECT_EQ(sc.found, sc.pieces);
   EXPECT_EQ(sc.complete, sc.pieces);
   // Only with the later surveys: without them the box is never seen.
   robot::CoreOptions one = robot::DefaultCoreOptions();
   one.explore.max_surveys = 1;
   sim::InProcessRun once = sim::RunInProcess(world, one, 4, 900, nullptr, &*faults);
-  EXPECT_EQ(metrics::ScoreObjects(once.core->Map(), once.core->slam(), world).found, sc.pieces - 1);
+  EXPECT_EQ(metrics::ScoreObjects(ToJson(once.core->Map()), once.core->slam(), world).found, sc.pieces - 1);
 }
 
 }  // namespace

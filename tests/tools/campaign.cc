@@ -9,6 +9,7 @@
 #include <sstream>
 #include <thread>
 
+#include "daemon/core_json.h"
 #include "sim/sim_run.h"
 #include "tests/tools/metrics.h"
 #include "tests/tools/svg_chart.h"
@@ -115,7 +116,7 @@ RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::Core
   sim::World furniture = world;
   furniture.objects.erase(std::remove_if(furniture.objects.begin(), furniture.objects.end(), IsClutter),
                           furniture.objects.end());
-  const metrics::ObjectScores objects = metrics::ScoreObjects(run.core->Map(), run.core->slam(), furniture);
+  const metrics::ObjectScores objects = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), furniture);
   s.pieces = objects.pieces;
   s.good = objects.good;
   s.complete = objects.good_complete;

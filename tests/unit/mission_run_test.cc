@@ -36,7 +36,7 @@ TEST_P(WallFollowRunTest, FollowsTheWholePerimeterWithoutTouchingAnything) {
     if (have_last) path_since_start += std::hypot(p.x - last.x, p.y - last.y);
     last = p;
     have_last = true;
-    if (!follow_start && r.core->Status(r.t)["behaviour"] == "follow") {
+    if (!follow_start && r.core->Status(r.t).mission.behaviour == control::FollowMode::kFollow) {
       follow_start = p;
       path_since_start = 0;
     }

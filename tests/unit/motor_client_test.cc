@@ -194,5 +194,55 @@ TEST(MotorClientTest, CommandsCarrySequenceAndZeroWhenDisabled) {
   EXPECT_DOUBLE_EQ(b.left_mps, 0.0);
 }
 
+// A bumper bit of CTRL_STATUS counts only when two frames in a row carry it: a
+// real contact lasts (the robot is stopped against the obstacle), a flipped bit
+// does not. The bits set in one frame only are counted.
+TEST(MotorClientTest, ABumperBitIsConfirmedByTwoStatusFramesInARow) {
+  MotorClient c{MotorClientOptions{}};
+  proto::ControllerStatus st;
+  st.state = proto::ControllerState::kReady;
+  const auto send = [&](uint8_t bumpers, int i) {
+    st.bumpers = bumpers;
+    st.seq = static_cast<uint8_t>(i);
+    st.timestamp_ms = static_cast<uint16_t>(1000 + 50 * i);
+    return c.Handle(Encode(st), 1.0 + 0.05 * i);
+  };
+  // The confirmed bits the event carries (0xFF: none).
+  const auto bits = [&](uint8_t bumpers, int i) { return send(bumpers, i).bumpers.value_or(0xFF); };
+  EXPECT_EQ(bits(0, 0), 0);
+  EXPECT_EQ(bits(kBumperLeft, 1), 0);  // a flipped bit: one frame only
+  EXPECT_EQ(bits(0, 2), 0);
+  EXPECT_EQ(c.counters().bumper_unconfirmed, 1u);
+  EXPECT_EQ(bits(kBumperRight, 3), 0);  // a real contact: it lasts
+  EXPECT_EQ(bits(kBumperRight, 4), kBumperRight);
+  EXPECT_EQ(c.bumpers(), kBumperRight);
+  EXPECT_EQ(bits(kBumperRight | kBumperLeft, 5), kBumperRight);
+  EXPECT_EQ(bits(kBumperRight | kBumperLeft, 6), kBumperRight | kBumperLeft);
+  EXPECT_EQ(bits(0, 7), 0);  // released: at once
+  EXPECT_EQ(c.bumpers(), 0);
+  EXPECT_EQ(c.counters().bumper_unconfirmed, 1u);
+  // Frames without status do not carry bumpers; the confirmed bits stay.
+  send(kBumperLeft, 8);
+  send(kBumperLeft, 9);
+  EXPECT_FALSE(c.Handle(Encode(proto::EncoderCounts{1500, 0, 0, 0}), 1.5).bumpers);
+  EXPECT_EQ(c.bumpers(), kBumperLeft);
+}
+
+TEST(MotorClientTest, ARejectedStatusFrameDoesNotMoveTheBumpers) {
+  MotorClient c{MotorClientOptions{}};
+  proto::ControllerStatus st;
+  st.bumpers = kBumperLeft;
+  st.timestamp_ms = 1000;
+  EXPECT_TRUE(c.Handle(Encode(st), 1.0).bumpers);
+  st.seq = 1;
+  st.timestamp_ms = 31000;  // 30 s ahead of the controller's clock: dropped
+  EXPECT_FALSE(c.Handle(Encode(st), 1.05).bumpers);
+  EXPECT_EQ(c.counters().implausible_time, 1u);
+  EXPECT_EQ(c.bumpers(), 0) << "one frame so far";
+  st.seq = 2;
+  st.timestamp_ms = 1100;
+  EXPECT_EQ(c.Handle(Encode(st), 1.1).bumpers.value_or(0xFF), kBumperLeft);
+}
+
 }  // namespace
 }  // namespace irslam::drivers

@@ -4,7 +4,6 @@
 
 #include "robot/robot_core.h"
 #include "control/safety.h"
-#include "proto/codec.h"
 #include "sim/sim_run.h"
 
 namespace irslam::control {
@@ -78,7 +77,7 @@ TEST(EstopTest, StopsAtOnceStaysInFaultUntilReleasedAndStartedThenCarriesOn) {
       EXPECT_EQ(core.state(), MissionState::kFault);
       EXPECT_FALSE(core.MotorEnable());
       EXPECT_EQ(core.last_command().left_mps, 0.0);
-      EXPECT_EQ(core.Status(r.t)["reason"], "emergency stop pressed");
+      EXPECT_EQ(core.Status(r.t).mission.reason, "emergency stop pressed");
       std::string why;
       EXPECT_FALSE(core.Start(r.t, &why));
       start_while_pressed = why;
@@ -95,7 +94,7 @@ TEST(EstopTest, StopsAtOnceStaysInFaultUntilReleasedAndStartedThenCarriesOn) {
       core.OnSafetyInput(robot::RobotCore::SafetyInput::kEstop, false, r.t);
     }
     if (released && !restarted && r.t >= 13.9 && r.t < 14) {
-      reason_after_release = core.Status(r.t)["reason"];
+      reason_after_release = core.Status(r.t).mission.reason;
       // The robot stood still all the while (the sim's wheels follow the zero command).
       EXPECT_LT(std::hypot(r.sim->true_pose().x - pose_at_press.x, r.sim->true_pose().y - pose_at_press.y), 0.05);
     }
@@ -128,10 +127,10 @@ TEST(EstopTest, PressedWhileIdleBlocksStartUntilReleased) {
   EXPECT_EQ(why, "emergency stop is pressed");
   core.OnSafetyInput(robot::RobotCore::SafetyInput::kEstop, false, 1.2);
   core.Tick(1.21);  // 10 ms: not yet released (debounce 20 ms)
-  EXPECT_TRUE(core.Status(1.21)["safety"]["estop"].get<bool>());
+  EXPECT_TRUE(core.Status(1.21).safety.estop);
   core.Tick(1.23);
-  EXPECT_FALSE(core.Status(1.23)["safety"]["estop"].get<bool>());
-  EXPECT_TRUE(core.Status(1.23)["safety"]["estop_latched"].get<bool>());
+  EXPECT_FALSE(core.Status(1.23).safety.estop);
+  EXPECT_TRUE(core.Status(1.23).safety.estop_latched);
   EXPECT_EQ(core.state(), MissionState::kFault);  // until start
   EXPECT_TRUE(core.StatusLed(1.25) != core.StatusLed(1.35)) << "fault blinks";
 }
@@ -151,7 +150,7 @@ TEST(BumperLineTest, AGpioBumperMakesTheRobotBackOff) {
     }
     if (bumped && r.t < 10.5) {
       min_speed_after = std::min(min_speed_after, core.last_command().left_mps + core.last_command().right_mps);
-      if (behaviour.empty()) behaviour = core.Status(r.t)["behaviour"];
+      if (behaviour.empty()) behaviour = ToString(core.Status(r.t).mission.behaviour);
       EXPECT_EQ(core.state(), MissionState::kWallFollow);
     }
   };
@@ -159,25 +158,6 @@ TEST(BumperLineTest, AGpioBumperMakesTheRobotBackOff) {
   EXPECT_TRUE(bumped);
   EXPECT_EQ(behaviour, "backoff");
   EXPECT_LT(min_speed_after, -0.05) << "the robot backs off";
-}
-
-TEST(BumperBitTest, AControllerBumperBitCountsWhenTwoStatusFramesCarryIt) {
-  robot::RobotCore core(robot::DefaultCoreOptions());
-  proto::ControllerStatus st;
-  st.state = proto::ControllerState::kReady;
-  const auto send = [&](uint8_t bumpers, int i) {
-    st.bumpers = bumpers;
-    st.seq = static_cast<uint8_t>(i);
-    st.timestamp_ms = static_cast<uint16_t>(1000 + 50 * i);
-    core.OnFrame(proto::Encode(st), 1.0 + 0.05 * i);
-  };
-  send(0, 0);
-  send(kBumperLeft, 1);  // a flipped bit: one frame only
-  send(0, 2);
-  send(kBumperRight, 3);  // a real contact: it lasts
-  send(kBumperRight, 4);
-  const auto s = core.Status(1.2);
-  EXPECT_EQ(s["frames"]["bumper_unconfirmed"], 1);
 }
 
 }  // namespace

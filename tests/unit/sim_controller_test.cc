@@ -115,10 +115,10 @@ TEST(SimControllerTest, IrSensorsSeeTheWallAtTheRightDistance) {
   sim.AdvanceTo(0.05, &out);
   robot::RobotCore rc(core);
   for (const auto& f : out) rc.OnFrame(f, 0.05);
-  const auto ranges = rc.Status(0.05)["ir_ranges"];
-  ASSERT_TRUE(ranges[3].is_number());
-  EXPECT_NEAR(ranges[3].get<double>(), 0.55, 0.003);  // sensor sits 5 cm ahead of the centre
-  EXPECT_TRUE(ranges[0].is_null());                   // nothing on the right
+  const auto ranges = rc.Status(0.05).ir.scan.range_m;
+  ASSERT_TRUE(ranges[3]);
+  EXPECT_NEAR(*ranges[3], 0.55, 0.003);  // sensor sits 5 cm ahead of the centre
+  EXPECT_FALSE(ranges[0]);               // nothing on the right
 }
 
 }  // namespace

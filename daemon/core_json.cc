@@ -1,0 +1,139 @@
+#include "daemon/core_json.h"
+
+namespace irslam {
+namespace {
+
+using nlohmann::json;
+
+json PoseJson(const Pose2& p) { return {p.x, p.y, p.theta}; }
+
+json MatrixJson(const Eigen::MatrixXd& m) {
+  json rows = json::array();
+  for (int i = 0; i < m.rows(); ++i) {
+    json row = json::array();
+    for (int j = 0; j < m.cols(); ++j) row.push_back(m(i, j));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+json BoxJson(const control::Box& b) { return json{b.xmin, b.ymin, b.xmax, b.ymax}; }
+
+json SlamStatsJson(const slam::SlamStats& st) {
+  return {{"windows", st.windows},           {"lines_extracted", st.lines_extracted},
+          {"updates", st.updates},           {"insertions", st.insertions},
+          {"rejected_angle", st.rejected_angle}, {"merges", st.merges},
+          {"loop_closures", st.loop_closures}};
+}
+
+json SafetyJson(const robot::SafetyStatus& s) {
+  return {{"estop", s.estop},
+          {"estop_latched", s.estop_latched},
+          {"bumper_left", s.bumper_left},
+          {"bumper_right", s.bumper_right},
+          {"motor_enable", s.motor_enable}};
+}
+
+json ControllerJson(const robot::ControllerLink& c) {
+  const auto& st = c.last;
+  return {{"alive", c.alive},
+          {"state", st ? static_cast<int>(st->state) : -1},
+          {"faults", st ? st->faults : 0},
+          {"bumpers", st ? st->bumpers : 0},
+          {"battery", st ? st->battery_v : 0.0}};
+}
+
+json FramesJson(const robot::FrameCounters& f) {
+  const drivers::MotorClientCounters& c = f.motor;
+  return {{"encoder", c.encoder_frames},
+          {"ir", c.ir_samples},
+          {"status", c.status_frames},
+          {"unknown_id", c.unknown_id},
+          {"wrong_dlc", c.wrong_dlc},
+          {"ignored", c.ignored},
+          {"seq_gap_encoder", c.seq_gap_encoder},
+          {"seq_gap_ir", c.seq_gap_ir},
+          {"seq_gap_status", c.seq_gap_status},
+          {"ir_unpaired", c.ir_unpaired},
+          {"controller_resets", c.controller_resets},
+          {"clock_jumps", c.clock_jumps},
+          {"duplicate", c.duplicate},
+          {"stale", c.stale},
+          {"implausible_time", c.implausible_time},
+          {"implausible_counts", c.implausible_counts},
+          {"ir_out_of_range", f.ir.out_of_range},
+          {"ir_stuck", f.ir.stuck},
+          {"bumper_unconfirmed", c.bumper_unconfirmed}};
+}
+
+json RoomJson(const control::RoomModel& room) {
+  return {{"walls",
+           {{"bottom", room.walls[0]}, {"right", room.walls[1]}, {"top", room.walls[2]}, {"left", room.walls[3]}}},
+          {"box", room.box ? BoxJson(*room.box) : json()}};
+}
+
+json ObjectJson(const control::ObjectModel& o) {
+  json j = {{"id", o.id},         {"kind", ToString(o.kind)},  {"lines", o.lines},
+            {"complete", o.complete}, {"box", BoxJson(o.box)}, {"open_ends", o.open_ends}};
+  if (!o.note.empty()) j["note"] = o.note;
+  return j;
+}
+
+json LineJson(const slam::LineFeature& l) {
+  return {{"id", l.id},
+          {"rho", l.rho},
+          {"theta", l.theta},
+          {"cov", MatrixJson(l.cov)},
+          {"p0", {l.p0.x(), l.p0.y()}},
+          {"p1", {l.p1.x(), l.p1.y()}},
+          {"length", l.length()},
+          {"observations", l.observations}};
+}
+
+}  // namespace
+
+json ToJson(const robot::CoreStatus& s) {
+  json ranges = json::array();
+  for (const auto& r : s.ir.scan.range_m) ranges.push_back(r ? json(*r) : json());
+  return {
+      {"state", ToString(s.mission.state)},
+      {"reason", s.mission.reason},
+      {"behaviour", ToString(s.mission.behaviour)},
+      {"robot_time", s.robot_time},
+      {"pose", PoseJson(s.slam.pose)},
+      {"pose_std", s.slam.pose_std},
+      {"distance", s.slam.distance_m},
+      {"lines", s.slam.lines},
+      {"slam", SlamStatsJson(s.slam.stats)},
+      {"objects", s.model.objects},
+      {"objects_pending", s.model.pending},
+      {"target_object", s.mission.target_object},
+      {"ir_ranges", ranges},
+      {"ir_adc", s.ir.adc},
+      {"command", {s.command.left_mps, s.command.right_mps}},
+      {"safety", SafetyJson(s.safety)},
+      {"controller", ControllerJson(s.controller)},
+      {"frames", FramesJson(s.frames)},
+  };
+}
+
+json ToJson(const robot::MapSnapshot& m) {
+  json objects = json::array();
+  for (const auto& o : m.objects) objects.push_back(ObjectJson(o));
+  json lines = json::array();
+  for (const auto& l : m.lines) lines.push_back(LineJson(l));
+  json traj = json::array();
+  for (const auto& p : m.trajectory) traj.push_back({p.t, p.pose.x, p.pose.y, p.pose.theta});
+  return {
+      {"frame", "map"},
+      {"state", ToString(m.state)},
+      {"pose", PoseJson(m.pose)},
+      {"pose_cov", MatrixJson(m.pose_cov)},
+      {"lines", lines},
+      {"room", RoomJson(m.room)},
+      {"objects", objects},
+      {"trajectory", traj},
+  };
+}
+
+}  // namespace irslam
