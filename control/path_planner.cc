@@ -11,6 +11,15 @@ double SegmentDistance(const Eigen::Vector2d& p, const Obstacle& o) { return (p 
 
 }  // namespace
 
+options::Table<PlannerOptions> PlannerKeys() {
+  using O = PlannerOptions;
+  static constexpr options::Key<O> kKeys[] = {
+      {"planner_resolution_m", &O::resolution_m, 0.01, 1, "m", "cell size of the go-to's planning grid"},
+      {"planner_margin_m", &O::margin_m, 0, 10, "m", "the planning grid extends this far beyond the obstacles"},
+  };
+  return kKeys;
+}
+
 Eigen::Vector2d ClosestPoint(const Obstacle& o, const Eigen::Vector2d& p) {
   const Eigen::Vector2d d = o.b - o.a;
   const double l2 = d.squaredNorm();

@@ -23,6 +23,26 @@ Point Hit(const SensorMount& m, double r) {
 
 }  // namespace
 
+options::Table<WallFollowerOptions> WallFollowerKeys() {
+  using O = WallFollowerOptions;
+  static constexpr options::Key<O> kKeys[] = {
+      {"follow_distance_m", &O::follow_distance_m, 0.1, 2.0, "m", "robot centre to the wall on the right"},
+      {"cruise_speed_mps", &O::cruise_speed_mps, 0.01, 2.0, "m/s", "speed along a wall"},
+      {"front_stop_m", &O::front_stop_m, 0.1, 2.0, "m", "obstacle this close ahead (from the centre): inner corner"},
+      {"front_slow_m", &O::front_slow_m, 0.1, 3.0, "m", "slow down below this distance ahead"},
+      {"k_distance", &O::k_distance, 0, 100, "rad/s/m", "turn rate per metre of distance error"},
+      {"k_angle", &O::k_angle, 0, 100, "rad/s/rad", "turn rate per radian of wall angle"},
+      {"max_turn_rate_rad_s", &O::max_turn_rate_rad_s, 0.05, 10, "rad/s", "turn rate limit while following"},
+      {"turn_rate_rad_s", &O::turn_rate_rad_s, 0.05, 10, "rad/s", "in-place turns at inner corners"},
+      {"lost_wall_margin_m", &O::lost_wall_margin_m, 0.05, 2.0, "m", "a wall farther than follow distance + this is lost"},
+      {"outer_arc_speed_mps", &O::outer_arc_speed_mps, 0.01, 2.0, "m/s", "speed round outer corners"},
+      {"backoff_speed_mps", &O::backoff_speed_mps, 0.01, 1.0, "m/s", "reverse speed after a bump"},
+      {"backoff_time_s", &O::backoff_time_s, 0.0, 10.0, "s", "reverse for this long after a bump"},
+      {"backoff_turn_rad", &O::backoff_turn_rad, 0.0, 3.2, "rad", "then turn left this much"},
+  };
+  return kKeys;
+}
+
 const char* ToString(FollowMode m) {
   switch (m) {
     case FollowMode::kFind: return "find_wall";

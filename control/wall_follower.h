@@ -10,6 +10,7 @@
 
 #include "slam/slam.h"
 #include "types/geometry.h"
+#include "types/options.h"
 #include "types/signals.h"
 
 namespace irslam::control {
@@ -29,6 +30,7 @@ struct WallFollowerOptions {
   double backoff_time_s = 0.6;
   double backoff_turn_rad = 0.5;
 };
+options::Table<WallFollowerOptions> WallFollowerKeys();  // [wall_follow]
 
 // Which case of the follower is active (shown in status).
 enum class FollowMode { kFind, kAlign, kFollow, kInnerCorner, kOuterCorner, kBackoff, kLeave };

@@ -192,9 +192,9 @@ void ReadMission(const json& j, robot::CoreOptions* o, std::string* e) {
   auto& m = o->mission;
   s.Num("max_time_s", &m.max_time_s, 1, 1e6);
   s.Num("progress_timeout_s", &m.progress_timeout_s, 1, 1e6);
-  s.Num("loop_min_distance_m", &m.loop_min_distance_m, 0.1, 1000);
-  s.Num("loop_close_radius_m", &m.loop_close_radius_m, 0.01, 10);
-  s.Num("loop_close_angle_rad", &m.loop_close_angle_rad, 0.01, 3.2);
+  s.Num("loop_min_distance_m", &m.loop.loop_min_distance_m, 0.1, 1000);
+  s.Num("loop_close_radius_m", &m.loop.loop_close_radius_m, 0.01, 10);
+  s.Num("loop_close_angle_rad", &m.loop.loop_close_angle_rad, 0.01, 3.2);
   s.Num("max_accel_mps2", &m.max_accel_mps2, 0.01, 20);
   s.Int("wall_follow_loops", &m.wall_follow_loops, 1, 100);
   ReadBool(j, "explore", &m.explore, &s);
@@ -271,24 +271,24 @@ void ReadGpio(const json& j, robot::CoreOptions* o, std::string* e) {
 void ReadExploration(const json& j, robot::CoreOptions* o, std::string* e) {
   Section s(j, "exploration", e);
   auto& x = o->explore;
-  s.Num("clearance_m", &x.clearance_m, 0, 1);
-  s.Num("goal_tolerance_m", &x.goal_tolerance_m, 0.01, 1);
-  s.Num("heading_tolerance_rad", &x.heading_tolerance_rad, 0.01, 1);
-  s.Num("cruise_speed_mps", &x.cruise_speed_mps, 0.01, 2);
-  s.Num("lookahead_m", &x.lookahead_m, 0.05, 2);
-  s.Num("k_heading", &x.k_heading, 0.1, 20);
-  s.Num("replan_period_s", &x.replan_period_s, 0.1, 60);
-  s.Num("front_stop_m", &x.front_stop_m, 0.1, 2);
-  s.Num("go_to_timeout_s", &x.go_to_timeout_s, 1, 3600);
-  s.Num("contour_timeout_s", &x.contour_timeout_s, 1, 3600);
-  s.Num("contour_leave_m", &x.contour_leave_m, 0.05, 10);
-  s.Int("contour_loops", &x.contour_loops, 1, 10);
-  s.Num("go_to_stuck_s", &x.go_to_stuck_s, 1, 3600);
-  ReadBool(j, "survey_centre", &x.survey_centre, &s);
+  s.Num("clearance_m", &x.go_to.clearance_m, 0, 1);
+  s.Num("goal_tolerance_m", &x.go_to.goal_tolerance_m, 0.01, 1);
+  s.Num("heading_tolerance_rad", &x.go_to.heading_tolerance_rad, 0.01, 1);
+  s.Num("cruise_speed_mps", &x.go_to.cruise_speed_mps, 0.01, 2);
+  s.Num("lookahead_m", &x.go_to.lookahead_m, 0.05, 2);
+  s.Num("k_heading", &x.go_to.k_heading, 0.1, 20);
+  s.Num("replan_period_s", &x.go_to.replan_period_s, 0.1, 60);
+  s.Num("front_stop_m", &x.go_to.front_stop_m, 0.1, 2);
+  s.Num("go_to_timeout_s", &x.go_to.go_to_timeout_s, 1, 3600);
+  s.Num("contour_timeout_s", &x.contour.contour_timeout_s, 1, 3600);
+  s.Num("contour_leave_m", &x.contour.contour_leave_m, 0.05, 10);
+  s.Int("contour_loops", &x.contour.contour_loops, 1, 10);
+  s.Num("go_to_stuck_s", &x.go_to.go_to_stuck_s, 1, 3600);
+  ReadBool(j, "survey_centre", &x.survey.survey_centre, &s);
   s.Num("survey_centre", nullptr, 0, 0);
-  s.Int("max_surveys", &x.max_surveys, 0, 100);
-  s.Num("survey_range_m", &x.survey_range_m, 0.1, 5);
-  s.Num("survey_min_unseen_m2", &x.survey_min_unseen_m2, 0, 100);
+  s.Int("max_surveys", &x.survey.max_surveys, 0, 100);
+  s.Num("survey_range_m", &x.survey.survey_range_m, 0.1, 5);
+  s.Num("survey_min_unseen_m2", &x.survey.survey_min_unseen_m2, 0, 100);
   s.Finish();
 }
 
@@ -443,19 +443,19 @@ std::string DumpConfig(const robot::CoreOptions& o) {
                {"control_group", o.api.control_group}, {"max_clients", o.api.max_clients},
                {"max_line_bytes", o.api.max_line_bytes}, {"idle_timeout_s", o.api.idle_timeout_s},
                {"max_pending_bytes", o.api.max_pending_bytes}}},
-      {"exploration", {{"clearance_m", ex.clearance_m}, {"goal_tolerance_m", ex.goal_tolerance_m},
-                       {"heading_tolerance_rad", ex.heading_tolerance_rad},
-                       {"cruise_speed_mps", ex.cruise_speed_mps}, {"lookahead_m", ex.lookahead_m},
-                       {"k_heading", ex.k_heading}, {"replan_period_s", ex.replan_period_s},
-                       {"front_stop_m", ex.front_stop_m}, {"go_to_timeout_s", ex.go_to_timeout_s},
-                       {"contour_timeout_s", ex.contour_timeout_s},
-                       {"contour_leave_m", ex.contour_leave_m},
-                       {"contour_loops", ex.contour_loops},
-                       {"go_to_stuck_s", ex.go_to_stuck_s},
-                       {"survey_centre", ex.survey_centre},
-                       {"max_surveys", ex.max_surveys},
-                       {"survey_range_m", ex.survey_range_m},
-                       {"survey_min_unseen_m2", ex.survey_min_unseen_m2}}},
+      {"exploration", {{"clearance_m", ex.go_to.clearance_m}, {"goal_tolerance_m", ex.go_to.goal_tolerance_m},
+                       {"heading_tolerance_rad", ex.go_to.heading_tolerance_rad},
+                       {"cruise_speed_mps", ex.go_to.cruise_speed_mps}, {"lookahead_m", ex.go_to.lookahead_m},
+                       {"k_heading", ex.go_to.k_heading}, {"replan_period_s", ex.go_to.replan_period_s},
+                       {"front_stop_m", ex.go_to.front_stop_m}, {"go_to_timeout_s", ex.go_to.go_to_timeout_s},
+                       {"contour_timeout_s", ex.contour.contour_timeout_s},
+                       {"contour_leave_m", ex.contour.contour_leave_m},
+                       {"contour_loops", ex.contour.contour_loops},
+                       {"go_to_stuck_s", ex.go_to.go_to_stuck_s},
+                       {"survey_centre", ex.survey.survey_centre},
+                       {"max_surveys", ex.survey.max_surveys},
+                       {"survey_range_m", ex.survey.survey_range_m},
+                       {"survey_min_unseen_m2", ex.survey.survey_min_unseen_m2}}},
       {"model", {{"axis_tolerance_rad", mo.axis_tolerance_rad}, {"collinear_m", mo.collinear_m},
                  {"corner_m", mo.corner_m}, {"wall_contact_m", mo.wall_contact_m}, {"wall_reach_m", mo.wall_reach_m}}},
       {"robot", {{"wheel_base_m", g.wheel_base_m}, {"wheel_radius_m", g.wheel_radius_m},
@@ -482,9 +482,9 @@ std::string DumpConfig(const robot::CoreOptions& o) {
                        {"backoff_time_s", w.backoff_time_s},
                        {"backoff_turn_rad", w.backoff_turn_rad}}},
       {"mission", {{"max_time_s", m.max_time_s}, {"progress_timeout_s", m.progress_timeout_s},
-                   {"loop_min_distance_m", m.loop_min_distance_m},
-                   {"loop_close_radius_m", m.loop_close_radius_m},
-                   {"loop_close_angle_rad", m.loop_close_angle_rad},
+                   {"loop_min_distance_m", m.loop.loop_min_distance_m},
+                   {"loop_close_radius_m", m.loop.loop_close_radius_m},
+                   {"loop_close_angle_rad", m.loop.loop_close_angle_rad},
                    {"max_accel_mps2", m.max_accel_mps2},
                    {"wall_follow_loops", m.wall_follow_loops},
                    {"explore", m.explore}}},
