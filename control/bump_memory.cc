@@ -12,18 +12,23 @@ options::Table<BumpMemoryOptions> BumpMemoryKeys() {
        "bearing of a contact when only one bumper is pressed"},
       {"bump_contact_offset_m", &O::bump_contact_offset_m, 0, 0.5, "m",
        "a contact is remembered this far beyond the body's edge"},
-      {"bump_min_spacing_m", &O::bump_min_spacing_m, 0, 1, "m", "a contact this close to the last one is not new"},
-      {"bump_reach_m", &O::bump_reach_m, 0, 10, "m", "remembered contacts farther than this are ignored"},
+      {"bump_min_spacing_m", &O::bump_min_spacing_m, 0, 1, "m",
+       "a contact this close to the last one is not new"},
+      {"bump_reach_m", &O::bump_reach_m, 0, 10, "m",
+       "remembered contacts farther than this are ignored"},
       {"bump_beam_half_width", &O::bump_beam_half_width, 0, 2, "",
        "a beam sees a contact within this many robot radii of its axis"},
-      {"bump_min_range_m", &O::bump_min_range_m, 0, 1, "m", "shortest virtual reading of a contact"},
+      {"bump_min_range_m", &O::bump_min_range_m, 0, 1, "m",
+       "shortest virtual reading of a contact"},
   };
   return kKeys;
 }
 
 double BumpMemory::ContactBearing(uint8_t bumpers) const {
   const bool left = bumpers & 1, right = bumpers & 2;
-  return left && !right ? options_.bump_contact_angle_rad : right && !left ? -options_.bump_contact_angle_rad : 0.0;
+  return left && !right   ? options_.bump_contact_angle_rad
+         : right && !left ? -options_.bump_contact_angle_rad
+                          : 0.0;
 }
 
 void BumpMemory::Record(const Pose2& me, uint8_t bumpers) {
@@ -32,7 +37,8 @@ void BumpMemory::Record(const Pose2& me, uint8_t bumpers) {
   const double a = me.theta + ContactBearing(bumpers);
   const double r = radius_m_ + options_.bump_contact_offset_m;
   const Eigen::Vector2d p(me.x + r * std::cos(a), me.y + r * std::sin(a));
-  if (points_.empty() || (points_.back() - p).norm() > options_.bump_min_spacing_m) points_.push_back(p);
+  if (points_.empty() || (points_.back() - p).norm() > options_.bump_min_spacing_m)
+    points_.push_back(p);
 }
 
 RangeScan BumpMemory::Apply(const RangeScan& scan, const Pose2& me) const {

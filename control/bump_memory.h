@@ -18,13 +18,13 @@
 namespace irslam::control {
 
 struct BumpMemoryOptions {
-  double bump_contact_angle_rad = 0.6;   // bearing of a contact when only one bumper is pressed
-  double bump_contact_offset_m = 0.02;   // the contact lies this far beyond the body's edge
-  double bump_min_spacing_m = 0.03;      // a contact this close to the last one is not new
-  double bump_reach_m = 1.0;             // contacts farther than this from the robot are ignored
-  double bump_beam_half_width = 0.5;     // a beam sees a contact within this many robot radii
-                                         // of its axis (the body would sweep into it)
-  double bump_min_range_m = 0.05;        // shortest virtual reading
+  double bump_contact_angle_rad = 0.6;  // bearing of a contact when only one bumper is pressed
+  double bump_contact_offset_m = 0.02;  // the contact lies this far beyond the body's edge
+  double bump_min_spacing_m = 0.03;     // a contact this close to the last one is not new
+  double bump_reach_m = 1.0;            // contacts farther than this from the robot are ignored
+  double bump_beam_half_width = 0.5;    // a beam sees a contact within this many robot radii
+                                        // of its axis (the body would sweep into it)
+  double bump_min_range_m = 0.05;       // shortest virtual reading
 };
 options::Table<BumpMemoryOptions> BumpMemoryKeys();
 

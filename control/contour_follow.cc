@@ -8,7 +8,8 @@ namespace irslam::control {
 options::Table<ContourOptions> ContourKeys() {
   using O = ContourOptions;
   static constexpr options::Key<O> kKeys[] = {
-      {"contour_timeout_s", &O::contour_timeout_s, 1, 3600, "s", "give up completing an object after this"},
+      {"contour_timeout_s", &O::contour_timeout_s, 1, 3600, "s",
+       "give up completing an object after this"},
       {"contour_leave_m", &O::contour_leave_m, 0.05, 10, "m",
        "a wall-contact object's free sides are done this much beyond the follow distance from it"},
       {"contour_loops", &O::contour_loops, 1, 10, "", "times round an object before giving it up"},
@@ -27,7 +28,8 @@ const ObjectModel* NearestPending(const EnvironmentModel& m, const Pose2& me) {
   double best = 1e18;
   for (const auto& o : m.objects) {
     if (o.complete || o.given_up) continue;
-    const double d = std::hypot(0.5 * (o.box.xmin + o.box.xmax) - me.x, 0.5 * (o.box.ymin + o.box.ymax) - me.y);
+    const double d =
+        std::hypot(0.5 * (o.box.xmin + o.box.xmax) - me.x, 0.5 * (o.box.ymin + o.box.ymax) - me.y);
     if (d < best) {
       best = d;
       target = &o;
@@ -36,7 +38,8 @@ const ObjectModel* NearestPending(const EnvironmentModel& m, const Pose2& me) {
   return target;
 }
 
-std::vector<ContourStart> ContourStarts(const ObjectModel& target, const std::vector<slam::LineFeature>& lines,
+std::vector<ContourStart> ContourStarts(const ObjectModel& target,
+                                        const std::vector<slam::LineFeature>& lines,
                                         const std::vector<TimedPose>& trajectory, const Pose2& me,
                                         double follow_distance_m) {
   std::vector<std::pair<double, const slam::LineFeature*>> sides;
@@ -45,7 +48,8 @@ std::vector<ContourStart> ContourStarts(const ObjectModel& target, const std::ve
     const Eigen::Vector2d mid = 0.5 * (l.p0 + l.p1);
     sides.emplace_back(std::hypot(mid.x() - me.x, mid.y() - me.y), &l);
   }
-  std::sort(sides.begin(), sides.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::sort(sides.begin(), sides.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<ContourStart> out;
   for (const auto& [d, side] : sides) {
     const Eigen::Vector2d mid = 0.5 * (side->p0 + side->p1);
@@ -85,14 +89,15 @@ bool ContourFollow::LeftTarget(const EnvironmentModel& m, const Pose2& here) con
   return false;
 }
 
-ContourFollow::Result ContourFollow::Step(double t, const slam::Slam& slam, const RangeScan& scan, bool bumped,
-                                          WallFollower* follower, Modeler* modeler) {
+ContourFollow::Result ContourFollow::Step(double t, const slam::Slam& slam, const RangeScan& scan,
+                                          bool bumped, WallFollower* follower, Modeler* modeler) {
   const auto& o = options_;
   const Twist tw = follower->Step(t, scan, bumped);
   turned_ += NormalizeAngle(slam.pose().theta - last_theta_);
   last_theta_ = slam.pose().theta;
   const Pose2 here = slam.map_pose();
-  if (trace_.empty() || (trace_.back() - Eigen::Vector2d(here.x, here.y)).norm() > o.contour_trace_step_m) {
+  if (trace_.empty() ||
+      (trace_.back() - Eigen::Vector2d(here.x, here.y)).norm() > o.contour_trace_step_m) {
     trace_.emplace_back(here.x, here.y);
   }
   if (slam.stats().windows != windows_seen_) {

@@ -18,14 +18,14 @@
 namespace irslam::control {
 
 struct ContourOptions {
-  double contour_timeout_s = 150;      // give up completing an object after this
-  int contour_loops = 2;               // times round an object before giving it up
-  double contour_leave_m = 0.6;        // a wall-contact object's free sides have been followed
-                                       // once the robot is this much farther than the follow
-                                       // distance from it (it follows the wall away)
-  double contour_leave_after_s = 5.0;  // ... checked only after following it this long
+  double contour_timeout_s = 150;        // give up completing an object after this
+  int contour_loops = 2;                 // times round an object before giving it up
+  double contour_leave_m = 0.6;          // a wall-contact object's free sides have been followed
+                                         // once the robot is this much farther than the follow
+                                         // distance from it (it follows the wall away)
+  double contour_leave_after_s = 5.0;    // ... checked only after following it this long
   double contour_turn_margin_rad = 0.3;  // all round: turned 2 pi plus this (clockwise)
-  double contour_trace_step_m = 0.05;  // the followed contour is recorded at this spacing
+  double contour_trace_step_m = 0.05;    // the followed contour is recorded at this spacing
 };
 options::Table<ContourOptions> ContourKeys();
 
@@ -41,18 +41,19 @@ struct ContourStart {
   double heading = 0;
 };
 // The object's sides, nearest the robot first.
-std::vector<ContourStart> ContourStarts(const ObjectModel& target, const std::vector<slam::LineFeature>& lines,
-                                        const std::vector<TimedPose>& trajectory, const Pose2& map_pose,
-                                        double follow_distance_m);
+std::vector<ContourStart> ContourStarts(const ObjectModel& target,
+                                        const std::vector<slam::LineFeature>& lines,
+                                        const std::vector<TimedPose>& trajectory,
+                                        const Pose2& map_pose, double follow_distance_m);
 
 class ContourFollow {
  public:
   enum class Status {
     kFollowing,
-    kComplete,        // the model completed it from new lines
-    kClosed,          // all round it: the model closed the last side from the contour
-    kIncomplete,      // all round it contour_loops times, still incomplete
-    kFreeSidesDone,   // a wall-contact object's free sides followed, still incomplete
+    kComplete,       // the model completed it from new lines
+    kClosed,         // all round it: the model closed the last side from the contour
+    kIncomplete,     // all round it contour_loops times, still incomplete
+    kFreeSidesDone,  // a wall-contact object's free sides followed, still incomplete
     kTimedOut,
   };
   struct Result {
@@ -71,8 +72,8 @@ class ContourFollow {
   // Following begins (the follower has been started beside the target).
   void Start(double t, double theta, int slam_windows);
   // One step; scan with bump memory applied. Updates the model through modeler.
-  Result Step(double t, const slam::Slam& slam, const RangeScan& scan, bool bumped, WallFollower* follower,
-              Modeler* modeler);
+  Result Step(double t, const slam::Slam& slam, const RangeScan& scan, bool bumped,
+              WallFollower* follower, Modeler* modeler);
 
  private:
   // The robot is far enough from the (wall-contact) target: its free sides were followed.

@@ -7,33 +7,48 @@ namespace irslam::control {
 options::Table<GoToOptions> GoToKeys() {
   using O = GoToOptions;
   static constexpr options::Key<O> kKeys[] = {
-      {"clearance_m", &O::clearance_m, 0, 1, "m", "planned paths keep the robot radius plus this from mapped lines"},
-      {"goal_tolerance_m", &O::goal_tolerance_m, 0.01, 1, "m", "a go-to goal is reached within this"},
-      {"heading_tolerance_rad", &O::heading_tolerance_rad, 0.01, 1, "rad", "heading reached at P1 within this"},
+      {"clearance_m", &O::clearance_m, 0, 1, "m",
+       "planned paths keep the robot radius plus this from mapped lines"},
+      {"goal_tolerance_m", &O::goal_tolerance_m, 0.01, 1, "m",
+       "a go-to goal is reached within this"},
+      {"heading_tolerance_rad", &O::heading_tolerance_rad, 0.01, 1, "rad",
+       "heading reached at P1 within this"},
       {"cruise_speed_mps", &O::cruise_speed_mps, 0.01, 2, "m/s", "speed along a planned path"},
-      {"lookahead_m", &O::lookahead_m, 0.05, 2, "m", "pure pursuit aims at the first path point this far"},
+      {"lookahead_m", &O::lookahead_m, 0.05, 2, "m",
+       "pure pursuit aims at the first path point this far"},
       {"k_heading", &O::k_heading, 0.1, 20, "rad/s/rad", "turn rate per radian of heading error"},
-      {"replan_period_s", &O::replan_period_s, 0.1, 60, "s", "the path is planned again this often"},
-      {"front_stop_m", &O::front_stop_m, 0.1, 2, "m", "something this close ahead: stop and plan around it"},
-      {"go_to_timeout_s", &O::go_to_timeout_s, 1, 3600, "s", "give a goal up if not reached by then"},
-      {"go_to_stuck_s", &O::go_to_stuck_s, 1, 3600, "s", "... or after this long without getting further"},
+      {"replan_period_s", &O::replan_period_s, 0.1, 60, "s",
+       "the path is planned again this often"},
+      {"front_stop_m", &O::front_stop_m, 0.1, 2, "m",
+       "something this close ahead: stop and plan around it"},
+      {"go_to_timeout_s", &O::go_to_timeout_s, 1, 3600, "s",
+       "give a goal up if not reached by then"},
+      {"go_to_stuck_s", &O::go_to_stuck_s, 1, 3600, "s",
+       "... or after this long without getting further"},
       {"go_to_progress_m", &O::go_to_progress_m, 0.01, 10, "m", "what counts as getting further"},
-      {"same_contact_m", &O::same_contact_m, 0, 2, "m", "a contact this close to the last is the same one"},
+      {"same_contact_m", &O::same_contact_m, 0, 2, "m",
+       "a contact this close to the last is the same one"},
       {"same_contact_escapes", &O::same_contact_escapes, 1, 100, "",
        "escapes from the same contact before it counts as a second one"},
       {"near_obstacle_m", &O::near_obstacle_m, 0, 1, "m",
        "a reading ahead within the robot radius plus this counts as in front"},
-      {"near_obstacle_offset_m", &O::near_obstacle_offset_m, 0, 1, "m", "... at its distance plus this"},
+      {"near_obstacle_offset_m", &O::near_obstacle_offset_m, 0, 1, "m",
+       "... at its distance plus this"},
       {"look_around_factor", &O::look_around_factor, 0, 10, "",
        "blocked with no path: turn at k_heading times this"},
-      {"align_max_rate_rad_s", &O::align_max_rate_rad_s, 0.05, 10, "rad/s", "turn rate limit turning to P1's heading"},
+      {"align_max_rate_rad_s", &O::align_max_rate_rad_s, 0.05, 10, "rad/s",
+       "turn rate limit turning to P1's heading"},
       {"pursuit_stop_angle_rad", &O::pursuit_stop_angle_rad, 0.05, 3.2, "rad",
        "aim this far off the heading: turn on the spot"},
-      {"pursuit_max_rate_rad_s", &O::pursuit_max_rate_rad_s, 0.05, 10, "rad/s", "turn rate limit along the path"},
-      {"approach_gain", &O::approach_gain, 0.01, 100, "1/s", "near the goal the speed is at most gain times distance"},
+      {"pursuit_max_rate_rad_s", &O::pursuit_max_rate_rad_s, 0.05, 10, "rad/s",
+       "turn rate limit along the path"},
+      {"approach_gain", &O::approach_gain, 0.01, 100, "1/s",
+       "near the goal the speed is at most gain times distance"},
       {"approach_min_speed_mps", &O::approach_min_speed_mps, 0, 1, "m/s", "... plus this"},
-      {"line_extension_m", &O::line_extension_m, 0, 2, "m", "mapped sides are planned around extended by this"},
-      {"hard_clearance_m", &O::hard_clearance_m, 0, 1, "m", "never plan closer than the robot radius plus this"},
+      {"line_extension_m", &O::line_extension_m, 0, 2, "m",
+       "mapped sides are planned around extended by this"},
+      {"hard_clearance_m", &O::hard_clearance_m, 0, 1, "m",
+       "never plan closer than the robot radius plus this"},
       {"keep_path_ratio", &O::keep_path_ratio, 1, 10, "",
        "keep the path being followed while at most this times the new one's length"},
       {"keep_path_slack_m", &O::keep_path_slack_m, 0, 10, "m", "... plus this"},
@@ -41,12 +56,16 @@ options::Table<GoToOptions> GoToKeys() {
        "... and clear of obstacles beyond this from the robot"},
       {"escape_side_m", &O::escape_side_m, 0, 1, "m",
        "after a contact, a mapped side within the robot radius plus this is what was hit"},
-      {"escape_max_s", &O::escape_max_s, 0.1, 60, "s", "an escape from a contact lasts at most this"},
+      {"escape_max_s", &O::escape_max_s, 0.1, 60, "s",
+       "an escape from a contact lasts at most this"},
       {"escape_heading_tolerance_rad", &O::escape_heading_tolerance_rad, 0.01, 3.2, "rad",
        "turned away from a contact within this"},
-      {"escape_k_heading", &O::escape_k_heading, 0.1, 20, "rad/s/rad", "turn rate per radian turning away"},
-      {"escape_max_rate_rad_s", &O::escape_max_rate_rad_s, 0.05, 10, "rad/s", "turn rate limit turning away"},
-      {"escape_drive_s", &O::escape_drive_s, 0, 10, "s", "drive off for this long once turned away"},
+      {"escape_k_heading", &O::escape_k_heading, 0.1, 20, "rad/s/rad",
+       "turn rate per radian turning away"},
+      {"escape_max_rate_rad_s", &O::escape_max_rate_rad_s, 0.05, 10, "rad/s",
+       "turn rate limit turning away"},
+      {"escape_drive_s", &O::escape_drive_s, 0, 10, "s",
+       "drive off for this long once turned away"},
       {"escape_speed_mps", &O::escape_speed_mps, 0, 1, "m/s", "speed driving off"},
   };
   return kKeys;
@@ -84,7 +103,8 @@ bool GoTo::Replan(const slam::Slam& slam, const RangeScan& scan, const BumpMemor
   for (int i = 0; i < kNumIrSensors; ++i) {
     if (!scan.range_m[i]) continue;
     const auto& m = mounts_[i];
-    const Eigen::Vector2d r(m.x + *scan.range_m[i] * std::cos(m.theta), m.y + *scan.range_m[i] * std::sin(m.theta));
+    const Eigen::Vector2d r(m.x + *scan.range_m[i] * std::cos(m.theta),
+                            m.y + *scan.range_m[i] * std::sin(m.theta));
     const Eigen::Vector2d w = Eigen::Vector2d(me.x, me.y) + RotateVector(r, me.theta);
     obstacles.push_back({w, w});
   }
@@ -135,7 +155,8 @@ Twist GoTo::Escape(double t, const Pose2& me) {
   if (!escape_turned_) {
     const double err = NormalizeAngle(escape_heading_ - me.theta);
     if (std::abs(err) > o.escape_heading_tolerance_rad) {
-      return {0, std::clamp(o.escape_k_heading * err, -o.escape_max_rate_rad_s, o.escape_max_rate_rad_s)};
+      return {0, std::clamp(o.escape_k_heading * err, -o.escape_max_rate_rad_s,
+                            o.escape_max_rate_rad_s)};
     }
     escape_turned_ = true;
     backoff_until_ = t + o.escape_drive_s;
@@ -173,7 +194,8 @@ Twist GoTo::Pursue(const Pose2& me, std::optional<double> front) {
     }
   }
   // Drop the corners already passed.
-  while (path_.size() > 1 && (path_.front() - pos).norm() < o.lookahead_m) path_.erase(path_.begin());
+  while (path_.size() > 1 && (path_.front() - pos).norm() < o.lookahead_m)
+    path_.erase(path_.begin());
   const double err = NormalizeAngle(std::atan2(aim.y() - pos.y(), aim.x() - pos.x()) - me.theta);
   double v = o.cruise_speed_mps * std::max(0.0, std::cos(err));
   if (std::abs(err) > o.pursuit_stop_angle_rad) v = 0;
@@ -182,15 +204,16 @@ Twist GoTo::Pursue(const Pose2& me, std::optional<double> front) {
   return {v, std::clamp(o.k_heading * err, -o.pursuit_max_rate_rad_s, o.pursuit_max_rate_rad_s)};
 }
 
-GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_scan, uint8_t bumpers,
-                        const BumpMemory& bumps, const WallFollower& follower) {
+GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_scan,
+                        uint8_t bumpers, const BumpMemory& bumps, const WallFollower& follower) {
   const auto& o = options_;
   if (t - since_ > o.go_to_timeout_s) return GiveUp("not reached in time");
   // Stuck (turning on the spot, no way found through what the beams see): after
   // go_to_stuck_s without getting go_to_progress_m further, give the goal up.
   {
     const Pose2 p = slam.pose();
-    if (progress_t_ < since_ || std::hypot(p.x - progress_at_.x(), p.y - progress_at_.y()) > o.go_to_progress_m) {
+    if (progress_t_ < since_ ||
+        std::hypot(p.x - progress_at_.x(), p.y - progress_at_.y()) > o.go_to_progress_m) {
       progress_t_ = t;
       progress_at_ = {p.x, p.y};
     } else if (t - progress_t_ > o.go_to_stuck_s && t >= backoff_until_) {
@@ -200,8 +223,10 @@ GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_s
   if (bumpers != 0 && t >= backoff_until_) {
     // The same contact again (not got clear of it yet) is not a second one.
     const Pose2 p = slam.pose();
-    const bool same = bumps_ >= 1 && std::hypot(p.x - last_contact_.x(), p.y - last_contact_.y()) < o.same_contact_m &&
-                      ++same_contact_escapes_ < o.same_contact_escapes;
+    const bool same =
+        bumps_ >= 1 &&
+        std::hypot(p.x - last_contact_.x(), p.y - last_contact_.y()) < o.same_contact_m &&
+        ++same_contact_escapes_ < o.same_contact_escapes;
     if (!same) same_contact_escapes_ = 0;
     last_contact_ = {p.x, p.y};
     if (bumps_ >= 1 && !same) {
@@ -232,7 +257,8 @@ GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_s
     }
     const double err = NormalizeAngle(p1_heading_ - me.theta);
     if (std::abs(err) < o.heading_tolerance_rad) return {Status::kArrived, {}, {}};
-    return Drive({0, std::clamp(o.k_heading * err, -o.align_max_rate_rad_s, o.align_max_rate_rad_s)});
+    return Drive(
+        {0, std::clamp(o.k_heading * err, -o.align_max_rate_rad_s, o.align_max_rate_rad_s)});
   }
   return Drive(Pursue(me, front));
 }

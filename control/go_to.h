@@ -24,41 +24,42 @@ namespace irslam::control {
 
 struct GoToOptions {
   // [exploration] keys since the first exploration release.
-  double clearance_m = 0.08;           // planned paths keep robot radius + this from mapped lines
-  double goal_tolerance_m = 0.08;      // the goal is reached within this
+  double clearance_m = 0.08;       // planned paths keep robot radius + this from mapped lines
+  double goal_tolerance_m = 0.08;  // the goal is reached within this
   double heading_tolerance_rad = 0.12;
   double cruise_speed_mps = 0.18;
   double lookahead_m = 0.25;
-  double k_heading = 2.5;              // rad/s per radian of heading error
+  double k_heading = 2.5;  // rad/s per radian of heading error
   double replan_period_s = 2.0;
-  double front_stop_m = 0.32;          // unmapped obstacle ahead: stop, replan
-  double go_to_timeout_s = 90;         // give the goal up if not reached by then
-  double go_to_stuck_s = 25;           // ... or if the robot got no go_to_progress_m further for this long
+  double front_stop_m = 0.32;   // unmapped obstacle ahead: stop, replan
+  double go_to_timeout_s = 90;  // give the goal up if not reached by then
+  double go_to_stuck_s = 25;    // ... or if the robot got no go_to_progress_m further for this long
   // Tuning numbers that used to be literals.
-  double go_to_progress_m = 0.3;       // what counts as getting further (stuck detection)
-  double same_contact_m = 0.15;        // a contact this close to the last one is the same contact
-  int same_contact_escapes = 5;        // ... for at most this many escapes
-  double near_obstacle_m = 0.12;       // a reading ahead within robot radius + this stops the robot
-  double near_obstacle_offset_m = 0.1; // ... and counts as this much farther than it is
-  double look_around_factor = 0.3;     // blocked: turn at k_heading times this (rad/s)
-  double align_max_rate_rad_s = 0.8;   // turning to the goal's heading
-  double pursuit_stop_angle_rad = 0.8; // aim this far off the heading: turn on the spot
+  double go_to_progress_m = 0.3;  // what counts as getting further (stuck detection)
+  double same_contact_m = 0.15;   // a contact this close to the last one is the same contact
+  int same_contact_escapes = 5;   // ... for at most this many escapes
+  double near_obstacle_m = 0.12;  // a reading ahead within robot radius + this stops the robot
+  double near_obstacle_offset_m = 0.1;  // ... and counts as this much farther than it is
+  double look_around_factor = 0.3;      // blocked: turn at k_heading times this (rad/s)
+  double align_max_rate_rad_s = 0.8;    // turning to the goal's heading
+  double pursuit_stop_angle_rad = 0.8;  // aim this far off the heading: turn on the spot
   double pursuit_max_rate_rad_s = 1.0;
-  double approach_gain = 0.6;          // speed limit near the goal: gain * distance + approach_min_speed_mps
+  double approach_gain =
+      0.6;  // speed limit near the goal: gain * distance + approach_min_speed_mps
   double approach_min_speed_mps = 0.03;
-  double line_extension_m = 0.15;      // mapped sides are planned around extended this much at each end
-  double hard_clearance_m = 0.02;      // never plan closer than robot radius + this
-  double keep_path_ratio = 1.25;       // keep the current path while shorter than ratio * new + slack
+  double line_extension_m = 0.15;  // mapped sides are planned around extended this much at each end
+  double hard_clearance_m = 0.02;  // never plan closer than robot radius + this
+  double keep_path_ratio = 1.25;   // keep the current path while shorter than ratio * new + slack
   double keep_path_slack_m = 0.2;
-  double keep_path_skip_m = 0.3;       // ... and clear beyond this from the robot
-  double escape_side_m = 0.08;         // a mapped side within robot radius + this is what was hit
-  double escape_max_s = 6.0;           // an escape lasts at most this
+  double keep_path_skip_m = 0.3;  // ... and clear beyond this from the robot
+  double escape_side_m = 0.08;    // a mapped side within robot radius + this is what was hit
+  double escape_max_s = 6.0;      // an escape lasts at most this
   double escape_heading_tolerance_rad = 0.25;
-  double escape_k_heading = 2.0;       // rad/s per radian while turning away
+  double escape_k_heading = 2.0;  // rad/s per radian while turning away
   double escape_max_rate_rad_s = 0.9;
-  double escape_drive_s = 1.0;         // drive off for this long once turned away
+  double escape_drive_s = 1.0;  // drive off for this long once turned away
   double escape_speed_mps = 0.08;
-  PlannerOptions planner;              // grid; inflation and hard distance come from the above
+  PlannerOptions planner;  // grid; inflation and hard distance come from the above
 };
 options::Table<GoToOptions> GoToKeys();
 
@@ -76,7 +77,8 @@ class GoTo {
     std::string why;  // kGiveUp
   };
 
-  GoTo(GoToOptions options, const RobotGeometry& geometry, const std::array<SensorMount, kNumIrSensors>& mounts)
+  GoTo(GoToOptions options, const RobotGeometry& geometry,
+       const std::array<SensorMount, kNumIrSensors>& mounts)
       : options_(options), radius_m_(geometry.radius_m), mounts_(mounts) {}
 
   // Sets the goal (internal frame) and plans a path to it from the robot's pose;

@@ -40,7 +40,8 @@ LoopEvent LoopDetector::Update(double t, bool steady, const Pose2& pose, double 
   if (distance_m - anchor_distance_ <= options_.loop_min_distance_m) return LoopEvent::kNone;
   const double d = std::hypot(pose.x - anchor_.x, pose.y - anchor_.y);
   const double a = std::abs(NormalizeAngle(pose.theta - anchor_.theta));
-  if (d >= options_.loop_close_radius_m || a >= options_.loop_close_angle_rad) return LoopEvent::kNone;
+  if (d >= options_.loop_close_radius_m || a >= options_.loop_close_angle_rad)
+    return LoopEvent::kNone;
   if (turned_since_anchor_ < -options_.loop_free_object_turn_rad) {
     have_anchor_ = false;
     return LoopEvent::kFreeObject;

@@ -7,13 +7,20 @@ namespace irslam::control {
 
 const char* ToString(MissionState s) {
   switch (s) {
-    case MissionState::kIdle: return "idle";
-    case MissionState::kWallFollow: return "wall_follow";
-    case MissionState::kModel: return "model";
-    case MissionState::kGoToP1: return "go_to_p1";
-    case MissionState::kContourFollow: return "contour_follow";
-    case MissionState::kDone: return "done";
-    case MissionState::kFault: return "fault";
+    case MissionState::kIdle:
+      return "idle";
+    case MissionState::kWallFollow:
+      return "wall_follow";
+    case MissionState::kModel:
+      return "model";
+    case MissionState::kGoToP1:
+      return "go_to_p1";
+    case MissionState::kContourFollow:
+      return "contour_follow";
+    case MissionState::kDone:
+      return "done";
+    case MissionState::kFault:
+      return "fault";
   }
   return "?";
 }
@@ -22,12 +29,17 @@ options::Table<MissionOptions> MissionKeys() {
   using O = MissionOptions;
   static constexpr options::Key<O> kKeys[] = {
       {"max_time_s", &O::max_time_s, 1, 1e6, "s", "the whole mission ends after this (robot time)"},
-      {"progress_timeout_s", &O::progress_timeout_s, 1, 1e6, "s", "no new distance covered for this long: give up"},
-      {"max_accel_mps2", &O::max_accel_mps2, 0.01, 20, "m/s2", "wheel acceleration limit of the command"},
-      {"wall_follow_loops", &O::wall_follow_loops, 1, 100, "", "loops of the room before modelling it"},
-      {"explore", &O::explore, 0, 0, "", "complete the objects after modelling (false: map the room only)"},
+      {"progress_timeout_s", &O::progress_timeout_s, 1, 1e6, "s",
+       "no new distance covered for this long: give up"},
+      {"max_accel_mps2", &O::max_accel_mps2, 0.01, 20, "m/s2",
+       "wheel acceleration limit of the command"},
+      {"wall_follow_loops", &O::wall_follow_loops, 1, 100, "",
+       "loops of the room before modelling it"},
+      {"explore", &O::explore, 0, 0, "",
+       "complete the objects after modelling (false: map the room only)"},
       {"progress_step_m", &O::progress_step_m, 0.001, 10, "m", "distance that counts as progress"},
-      {"max_step_s", &O::max_step_s, 0.001, 10, "s", "longest control step the acceleration limit allows for"},
+      {"max_step_s", &O::max_step_s, 0.001, 10, "s",
+       "longest control step the acceleration limit allows for"},
   };
   return kKeys;
 }
@@ -121,14 +133,16 @@ bool Mission::Watchdogs(double t, const slam::Slam& slam) {
     progress_distance_ = slam.distance_m();
     progress_t_ = t;
   } else if (t - progress_t_ > options_.progress_timeout_s) {
-    Enter(MissionState::kIdle, t,
-          "no progress for " + std::to_string(static_cast<int>(options_.progress_timeout_s)) + " s");
+    Enter(
+        MissionState::kIdle, t,
+        "no progress for " + std::to_string(static_cast<int>(options_.progress_timeout_s)) + " s");
     return false;
   }
   return true;
 }
 
-WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& scan, uint8_t bumpers) {
+WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& scan,
+                           uint8_t bumpers) {
   // Remember what was hit, so followers and planned paths keep away from it.
   bumps_.Record(slam.pose(), bumpers);
   const double dt = std::clamp(t - last_t_, 0.0, options_.max_step_s);
@@ -136,24 +150,32 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
   switch (state_) {
     case MissionState::kIdle:
     case MissionState::kDone:
-    case MissionState::kFault: return Halt();
-    default: break;
+    case MissionState::kFault:
+      return Halt();
+    default:
+      break;
   }
   if (!Watchdogs(t, slam)) return Halt();
   switch (state_) {
-    case MissionState::kWallFollow: return StepWallFollow(t, dt, slam, scan, bumpers != 0);
-    case MissionState::kModel: return StepModel(t, slam);
-    case MissionState::kGoToP1: return StepGoTo(t, dt, slam, scan, bumpers);
-    case MissionState::kContourFollow: return StepContour(t, dt, slam, scan, bumpers != 0);
-    default: return Halt();
+    case MissionState::kWallFollow:
+      return StepWallFollow(t, dt, slam, scan, bumpers != 0);
+    case MissionState::kModel:
+      return StepModel(t, slam);
+    case MissionState::kGoToP1:
+      return StepGoTo(t, dt, slam, scan, bumpers);
+    case MissionState::kContourFollow:
+      return StepContour(t, dt, slam, scan, bumpers != 0);
+    default:
+      return Halt();
   }
 }
 
-WheelCommand Mission::StepWallFollow(double t, double dt, const slam::Slam& slam, const RangeScan& raw_scan,
-                                     bool bumped) {
+WheelCommand Mission::StepWallFollow(double t, double dt, const slam::Slam& slam,
+                                     const RangeScan& raw_scan, bool bumped) {
   const Twist tw = follower_.Step(t, bumps_.Apply(raw_scan, slam.pose()), bumped);
   switch (loop_.Update(t, follower_.steady(), slam.pose(), slam.distance_m())) {
-    case LoopEvent::kNone: break;
+    case LoopEvent::kNone:
+      break;
     case LoopEvent::kFreeObject:
       // Walked clockwise round the outside of something: a free object, not
       // the room. Leave it and find a wall.
@@ -182,8 +204,8 @@ WheelCommand Mission::StepModel(double t, const slam::Slam& slam) {
     int complete = 0;
     for (const auto& o : m.objects) complete += o.complete;
     return To(MissionState::kDone, t,
-              "room modelled: " + std::to_string(m.objects.size()) + " objects, " + std::to_string(complete) +
-                  " complete");
+              "room modelled: " + std::to_string(m.objects.size()) + " objects, " +
+                  std::to_string(complete) + " complete");
   }
   return GoToObject(t, slam, m);
 }
@@ -198,8 +220,10 @@ WheelCommand Mission::GoToObject(double t, const slam::Slam& slam, const Environ
   target_ = target->id;
   contour_.SetTarget(target_, target->kind == ObjectKind::kWallContact);
   const double rot = slam.map_rotation();
-  for (const auto& s : ContourStarts(*target, slam.map_lines(), slam.map_trajectory(), me, follow_distance_m_)) {
-    if (go_to_.TryGoal(RotateVector(s.p, -rot), NormalizeAngle(s.heading - rot), true, slam, bumps_)) {
+  for (const auto& s :
+       ContourStarts(*target, slam.map_lines(), slam.map_trajectory(), me, follow_distance_m_)) {
+    if (go_to_.TryGoal(RotateVector(s.p, -rot), NormalizeAngle(s.heading - rot), true, slam,
+                       bumps_)) {
       Enter(MissionState::kGoToP1, t, "going to object " + std::to_string(target_));
       go_to_.Begin(t);
       return Halt();
@@ -214,7 +238,8 @@ bool Mission::StartSurvey(double t, const slam::Slam& slam, const EnvironmentMod
   const Box& room = *m.room.box;
   const double rot = slam.map_rotation();
   const auto go = [&](const Eigen::Vector2d& p) {
-    if (!go_to_.TryGoal(RotateVector(p, -rot), slam.pose().theta, false, slam, bumps_)) return false;
+    if (!go_to_.TryGoal(RotateVector(p, -rot), slam.pose().theta, false, slam, bumps_))
+      return false;
     survey_.Accept(p);
     target_ = 0;
     Enter(MissionState::kGoToP1, t, "surveying the room (" + std::to_string(survey_.done()) + ")");
@@ -237,18 +262,22 @@ WheelCommand Mission::AbandonGoTo(double t, const std::string& why) {
   return To(MissionState::kModel, t, "object " + std::to_string(target_) + ", P1: " + why);
 }
 
-WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& raw_scan,
-                               uint8_t bumpers) {
+WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam,
+                               const RangeScan& raw_scan, uint8_t bumpers) {
   const GoTo::Result r = go_to_.Step(t, slam, raw_scan, bumpers, bumps_, follower_);
   switch (r.status) {
-    case GoTo::Status::kDriving: return ToWheels(r.twist, dt);
-    case GoTo::Status::kGiveUp: return AbandonGoTo(t, r.why);
-    case GoTo::Status::kArrived: break;
+    case GoTo::Status::kDriving:
+      return ToWheels(r.twist, dt);
+    case GoTo::Status::kGiveUp:
+      return AbandonGoTo(t, r.why);
+    case GoTo::Status::kArrived:
+      break;
   }
   if (target_ == 0) {
     // The survey point: one full turn on the spot, then model again.
     Twist tw;
-    if (survey_.TurnRound(slam.pose().theta, &tw)) return To(MissionState::kModel, t, "survey done");
+    if (survey_.TurnRound(slam.pose().theta, &tw))
+      return To(MissionState::kModel, t, "survey done");
     return ToWheels(tw, dt);
   }
   // P1, heading along the side: follow the object's contour.
@@ -259,15 +288,18 @@ WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam, cons
   return ToWheels({0, 0}, dt);
 }
 
-WheelCommand Mission::StepContour(double t, double dt, const slam::Slam& slam, const RangeScan& raw_scan,
-                                  bool bumped) {
+WheelCommand Mission::StepContour(double t, double dt, const slam::Slam& slam,
+                                  const RangeScan& raw_scan, bool bumped) {
   const RangeScan scan = bumps_.Apply(raw_scan, slam.pose());
   const ContourFollow::Result r = contour_.Step(t, slam, scan, bumped, &follower_, &modeler_);
   const std::string object = "object " + std::to_string(target_);
   switch (r.status) {
-    case ContourFollow::Status::kFollowing: return ToWheels(r.twist, dt);
-    case ContourFollow::Status::kComplete: return To(MissionState::kModel, t, object + " complete");
-    case ContourFollow::Status::kClosed: return To(MissionState::kModel, t, object + " complete (contour closed)");
+    case ContourFollow::Status::kFollowing:
+      return ToWheels(r.twist, dt);
+    case ContourFollow::Status::kComplete:
+      return To(MissionState::kModel, t, object + " complete");
+    case ContourFollow::Status::kClosed:
+      return To(MissionState::kModel, t, object + " complete (contour closed)");
     case ContourFollow::Status::kIncomplete:
       modeler_.GiveUp(target_, "contour followed all round, still incomplete");
       return To(MissionState::kModel, t, object + " incomplete after a full contour");

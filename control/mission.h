@@ -9,19 +9,20 @@
 //
 //   from            on                                   to              reason
 //   idle, done      start                                wall_follow     ""
-//   wall_follow     loop round a free object             wall_follow     "circled a free object; ..."
-//   wall_follow     room loop, more loops asked for      wall_follow     (unchanged)
-//   wall_follow     room loop, the last one              model           "wall-following loop closed"
-//   model           exploration off                      done            "room modelled (exploration off)"
-//   model           nothing pending, a survey planned    go_to_p1        "surveying the room (n)"
-//   model           nothing pending                      done            "room modelled: n objects, k complete"
-//   model           P1 of the nearest pending object     go_to_p1        "going to object n"
-//   model           no P1 reachable (object given up)    model           "object n: P1 unreachable"
-//   go_to_p1        timeout, stuck, blocked (given up)   model           "object n, P1: why" / "survey point: why"
-//   go_to_p1        survey point: turned round           model           "survey done"
-//   go_to_p1        at P1, heading along the side        contour_follow  "contour following object n"
-//   contour_follow  complete / closed by the contour     model           "object n complete ..."
-//   contour_follow  all round, free sides, timeout       model           "object n incomplete ..." (given up)
+//   wall_follow     loop round a free object             wall_follow     "circled a free object;
+//   ..." wall_follow     room loop, more loops asked for      wall_follow     (unchanged)
+//   wall_follow     room loop, the last one              model           "wall-following loop
+//   closed" model           exploration off                      done            "room modelled
+//   (exploration off)" model           nothing pending, a survey planned    go_to_p1 "surveying the
+//   room (n)" model           nothing pending                      done            "room modelled:
+//   n objects, k complete" model           P1 of the nearest pending object     go_to_p1 "going to
+//   object n" model           no P1 reachable (object given up)    model           "object n: P1
+//   unreachable" go_to_p1        timeout, stuck, blocked (given up)   model           "object n,
+//   P1: why" / "survey point: why" go_to_p1        survey point: turned round           model
+//   "survey done" go_to_p1        at P1, heading along the side        contour_follow  "contour
+//   following object n" contour_follow  complete / closed by the contour     model "object n
+//   complete ..." contour_follow  all round, free sides, timeout       model           "object n
+//   incomplete ..." (given up)
 //
 // Room for the next behaviours (not implemented): clean, return_home and
 // relocalize each become a behaviour class beside these, a MissionState (new
@@ -62,15 +63,15 @@ enum class MissionState : uint8_t {
 const char* ToString(MissionState s);
 
 struct MissionOptions {
-  double max_time_s = 900;           // whole mission, robot time
-  double progress_timeout_s = 120;   // no new distance covered for this long: give up
-  double max_accel_mps2 = 0.8;       // wheel acceleration limit of the command
-  int wall_follow_loops = 1;         // loops of the room before modelling (Fig. 18: 5)
-  bool explore = true;               // false: model after wall following and stop (map only)
-  double progress_step_m = 0.05;     // distance that counts as progress
-  double max_step_s = 0.1;           // longest control step used for the acceleration limit
-  LoopOptions loop;                  // [mission] too
-  BumpMemoryOptions bump;            // [mission] too
+  double max_time_s = 900;          // whole mission, robot time
+  double progress_timeout_s = 120;  // no new distance covered for this long: give up
+  double max_accel_mps2 = 0.8;      // wheel acceleration limit of the command
+  int wall_follow_loops = 1;        // loops of the room before modelling (Fig. 18: 5)
+  bool explore = true;              // false: model after wall following and stop (map only)
+  double progress_step_m = 0.05;    // distance that counts as progress
+  double max_step_s = 0.1;          // longest control step used for the acceleration limit
+  LoopOptions loop;                 // [mission] too
+  BumpMemoryOptions bump;           // [mission] too
 };
 options::Table<MissionOptions> MissionKeys();
 
@@ -121,10 +122,13 @@ class Mission {
   }
   // Time limit and progress watchdog; false if the mission was ended.
   bool Watchdogs(double t, const slam::Slam& slam);
-  WheelCommand StepWallFollow(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);
+  WheelCommand StepWallFollow(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
+                              bool bumped);
   WheelCommand StepModel(double t, const slam::Slam& slam);
-  WheelCommand StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& scan, uint8_t bumpers);
-  WheelCommand StepContour(double t, double dt, const slam::Slam& slam, const RangeScan& scan, bool bumped);
+  WheelCommand StepGoTo(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
+                        uint8_t bumpers);
+  WheelCommand StepContour(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
+                           bool bumped);
   // Plans to the nearest pending object's P1 and starts going there.
   WheelCommand GoToObject(double t, const slam::Slam& slam, const EnvironmentModel& m);
   // Gives the go-to's goal up (the object, noted in the model; or the survey point).

@@ -49,8 +49,8 @@ struct ObjectModel {
   std::vector<int> lines;
   bool complete = false;
   Box box;
-  int open_ends = 0;       // line ends that meet no other side (nor a wall)
-  bool given_up = false;   // exploration could not complete it (kept: complete = false)
+  int open_ends = 0;      // line ends that meet no other side (nor a wall)
+  bool given_up = false;  // exploration could not complete it (kept: complete = false)
   std::string note;
 };
 

@@ -8,23 +8,30 @@ namespace irslam::control {
 options::Table<SurveyOptions> SurveyKeys() {
   using O = SurveyOptions;
   static constexpr options::Key<O> kKeys[] = {
-      {"survey_centre", &O::survey_centre, 0, 0, "", "look round from inside the room, first from its middle"},
+      {"survey_centre", &O::survey_centre, 0, 0, "",
+       "look round from inside the room, first from its middle"},
       {"max_surveys", &O::max_surveys, 0, 100, "", "... from at most this many points"},
-      {"survey_range_m", &O::survey_range_m, 0.1, 5, "m", "room within this of the trajectory counts as seen"},
+      {"survey_range_m", &O::survey_range_m, 0.1, 5, "m",
+       "room within this of the trajectory counts as seen"},
       {"survey_min_unseen_m2", &O::survey_min_unseen_m2, 0, 100, "m2",
        "a survey point must see at least this much unseen room"},
       {"survey_middle_search_m", &O::survey_middle_search_m, 0, 10, "m",
        "the first survey point is searched this far round the middle"},
-      {"survey_middle_step_m", &O::survey_middle_step_m, 0.01, 10, "m", "... on rings this far apart"},
+      {"survey_middle_step_m", &O::survey_middle_step_m, 0.01, 10, "m",
+       "... on rings this far apart"},
       {"survey_cell_m", &O::survey_cell_m, 0.05, 2, "m", "grid cell of the unseen-room count"},
       {"survey_object_margin_m", &O::survey_object_margin_m, 0, 2, "m",
        "cells this close to a known object are not counted as room"},
-      {"survey_wall_margin_m", &O::survey_wall_margin_m, 0, 2, "m", "survey points keep this from the walls"},
+      {"survey_wall_margin_m", &O::survey_wall_margin_m, 0, 2, "m",
+       "survey points keep this from the walls"},
       {"survey_trajectory_stride", &O::survey_trajectory_stride, 1, 100, "",
        "every this-many trajectory points count as seen from"},
-      {"survey_candidates", &O::survey_candidates, 1, 1000, "", "best survey points tried before giving up"},
-      {"survey_turn_rate_rad_s", &O::survey_turn_rate_rad_s, 0.05, 10, "rad/s", "turn rate looking round"},
-      {"survey_turn_margin_rad", &O::survey_turn_margin_rad, 0, 3.2, "rad", "looking round: a full turn plus this"},
+      {"survey_candidates", &O::survey_candidates, 1, 1000, "",
+       "best survey points tried before giving up"},
+      {"survey_turn_rate_rad_s", &O::survey_turn_rate_rad_s, 0.05, 10, "rad/s",
+       "turn rate looking round"},
+      {"survey_turn_margin_rad", &O::survey_turn_margin_rad, 0, 3.2, "rad",
+       "looking round: a full turn plus this"},
   };
   return kKeys;
 }
@@ -48,9 +55,11 @@ std::vector<Eigen::Vector2d> Survey::MiddlePoints(const Box& room) const {
   std::vector<Eigen::Vector2d> out;
   if (done_ != 0) return out;
   const Eigen::Vector2d middle = Middle(room);
-  for (double radius = 0; radius < options_.survey_middle_search_m; radius += options_.survey_middle_step_m) {
+  for (double radius = 0; radius < options_.survey_middle_search_m;
+       radius += options_.survey_middle_step_m) {
     for (int k = 0; k < (radius > 0 ? 8 : 1); ++k) {
-      out.push_back(middle + radius * Eigen::Vector2d(std::cos(k * M_PI / 4), std::sin(k * M_PI / 4)));
+      out.push_back(middle +
+                    radius * Eigen::Vector2d(std::cos(k * M_PI / 4), std::sin(k * M_PI / 4)));
     }
   }
   return out;
@@ -74,7 +83,8 @@ std::vector<Eigen::Vector2d> Survey::RankedPoints(const Box& r, const std::vecto
         in_object = in_object || (x > ob.box.xmin - margin && x < ob.box.xmax + margin &&
                                   y > ob.box.ymin - margin && y < ob.box.ymax + margin);
       }
-      const bool clear_of_walls = x - r.xmin > wall && r.xmax - x > wall && y - r.ymin > wall && r.ymax - y > wall;
+      const bool clear_of_walls =
+          x - r.xmin > wall && r.xmax - x > wall && y - r.ymin > wall && r.ymax - y > wall;
       if (!in_object && clear_of_walls) candidates.push_back(c);
       bool seen = in_object;
       for (size_t k = 0; k < traj.size() && !seen; k += stride) {
@@ -94,9 +104,11 @@ std::vector<Eigen::Vector2d> Survey::RankedPoints(const Box& r, const std::vecto
   for (const auto& c : candidates) {
     int n = 0;
     for (const auto& u : unseen) n += (u - c).norm() < range;
-    if (n * cell * cell >= o.survey_min_unseen_m2) ranked.emplace_back(n - 0.01 * (c - middle).norm(), c);
+    if (n * cell * cell >= o.survey_min_unseen_m2)
+      ranked.emplace_back(n - 0.01 * (c - middle).norm(), c);
   }
-  std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::sort(ranked.begin(), ranked.end(),
+            [](const auto& a, const auto& b) { return a.first > b.first; });
   std::vector<Eigen::Vector2d> out;
   for (size_t i = 0; i < ranked.size() && i < static_cast<size_t>(o.survey_candidates); ++i) {
     out.push_back(ranked[i].second);

@@ -18,20 +18,20 @@ namespace irslam::control {
 
 struct SurveyOptions {
   // [exploration] keys since the first exploration release.
-  bool survey_centre = true;           // look round from inside the room (first its middle)
-  int max_surveys = 3;                 // ... from at most this many points
-  double survey_range_m = 0.7;         // a part of the room within this of the trajectory was seen
-  double survey_min_unseen_m2 = 0.4;   // a survey point must see at least this much unseen room
+  bool survey_centre = true;          // look round from inside the room (first its middle)
+  int max_surveys = 3;                // ... from at most this many points
+  double survey_range_m = 0.7;        // a part of the room within this of the trajectory was seen
+  double survey_min_unseen_m2 = 0.4;  // a survey point must see at least this much unseen room
   // Tuning numbers that used to be literals.
-  double survey_middle_search_m = 1.2;  // the first point: the reachable one nearest the middle,
-  double survey_middle_step_m = 0.2;    // ... on rings this far apart out to this radius
-  double survey_cell_m = 0.2;           // grid of the unseen-room count
-  double survey_object_margin_m = 0.35; // cells this close to a known object are not room
-  double survey_wall_margin_m = 0.4;    // survey points keep this from the walls
-  int survey_trajectory_stride = 2;     // every this-many trajectory points count as seen from
-  int survey_candidates = 8;            // best-ranked points tried (planned to) before giving up
-  double survey_turn_rate_rad_s = 0.5;  // looking round
-  double survey_turn_margin_rad = 0.3;  // one full turn plus this
+  double survey_middle_search_m = 1.2;   // the first point: the reachable one nearest the middle,
+  double survey_middle_step_m = 0.2;     // ... on rings this far apart out to this radius
+  double survey_cell_m = 0.2;            // grid of the unseen-room count
+  double survey_object_margin_m = 0.35;  // cells this close to a known object are not room
+  double survey_wall_margin_m = 0.4;     // survey points keep this from the walls
+  int survey_trajectory_stride = 2;      // every this-many trajectory points count as seen from
+  int survey_candidates = 8;             // best-ranked points tried (planned to) before giving up
+  double survey_turn_rate_rad_s = 0.5;   // looking round
+  double survey_turn_margin_rad = 0.3;   // one full turn plus this
 };
 options::Table<SurveyOptions> SurveyKeys();
 
@@ -47,7 +47,8 @@ class Survey {
   // first survey, the middle of the room and rings round it ...
   std::vector<Eigen::Vector2d> MiddlePoints(const Box& room) const;
   // ... then the free points that see most unseen room.
-  std::vector<Eigen::Vector2d> RankedPoints(const Box& room, const std::vector<TimedPose>& trajectory,
+  std::vector<Eigen::Vector2d> RankedPoints(const Box& room,
+                                            const std::vector<TimedPose>& trajectory,
                                             const std::vector<ObjectModel>& objects) const;
   // The robot sets off to survey point p.
   void Accept(const Eigen::Vector2d& p);

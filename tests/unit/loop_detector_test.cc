@@ -59,7 +59,7 @@ TEST(LoopDetectorTest, NoAnchorUntilSteadyLongEnough) {
   d.Update(2.6, true, p, 0);
   EXPECT_FALSE(d.has_anchor());  // 1.4 s
   d.Update(2.75, true, p, 0);
-  EXPECT_TRUE(d.has_anchor());   // 1.55 s
+  EXPECT_TRUE(d.has_anchor());  // 1.55 s
 }
 
 }  // namespace
