@@ -31,7 +31,7 @@ options::Table<MissionOptions> MissionKeys() {
       {"max_time_s", &O::max_time_s, 1, 1e6, "s", "the whole mission ends after this (robot time)"},
       {"progress_timeout_s", &O::progress_timeout_s, 1, 1e6, "s",
        "no new distance covered for this long: give up"},
-      {"max_accel_mps2", &O::max_accel_mps2, 0.01, 20, "m/s2",
+      {"max_accel_mps2", &O::max_accel_mps2, 0.01, 20, "m/s^2",
        "wheel acceleration limit of the command"},
       {"wall_follow_loops", &O::wall_follow_loops, 1, 100, "",
        "loops of the room before modelling it"},

@@ -13,7 +13,7 @@ options::Table<SurveyOptions> SurveyKeys() {
       {"max_surveys", &O::max_surveys, 0, 100, "", "... from at most this many points"},
       {"survey_range_m", &O::survey_range_m, 0.1, 5, "m",
        "room within this of the trajectory counts as seen"},
-      {"survey_min_unseen_m2", &O::survey_min_unseen_m2, 0, 100, "m2",
+      {"survey_min_unseen_m2", &O::survey_min_unseen_m2, 0, 100, "m^2",
        "a survey point must see at least this much unseen room"},
       {"survey_middle_search_m", &O::survey_middle_search_m, 0, 10, "m",
        "the first survey point is searched this far round the middle"},

@@ -4,8 +4,8 @@
 // that stop the robot and set a bumper bit, and the controller's CAN protocol
 // (proto/irslam.dbc): it stops the wheels when commands stop for 200 ms.
 // Pure: time advances only through AdvanceTo(). Seeded, reproducible.
-#ifndef IRSLAM_TESTS_SIM_SIM_CONTROLLER_H_
-#define IRSLAM_TESTS_SIM_SIM_CONTROLLER_H_
+#ifndef IRSLAM_SIM_SIM_CONTROLLER_H_
+#define IRSLAM_SIM_SIM_CONTROLLER_H_
 
 #include <linux/can.h>
 
@@ -90,4 +90,4 @@ class SimController {
 
 }  // namespace irslam::sim
 
-#endif  // IRSLAM_TESTS_SIM_SIM_CONTROLLER_H_
+#endif  // IRSLAM_SIM_SIM_CONTROLLER_H_

@@ -1,7 +1,7 @@
 // Simulated worlds (contracts.md §1): a rectangular or orthogonal-polygon room with
 // axis-aligned boxes, a start pose, an optional seed and noise parameters.
-#ifndef IRSLAM_TESTS_SIM_WORLD_H_
-#define IRSLAM_TESTS_SIM_WORLD_H_
+#ifndef IRSLAM_SIM_WORLD_H_
+#define IRSLAM_SIM_WORLD_H_
 
 #include <optional>
 #include <string>
@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "types/geometry.h"
+#include "types/options.h"
 #include "types/signals.h"
 
 namespace irslam::sim {
@@ -36,6 +37,9 @@ struct SimNoise {
   double ir_beam_deg = 5.0;
 };
 
+// The world file's "noise" keys (contracts.md §1 and §7), with bounds and docs.
+options::Table<SimNoise> SimNoiseKeys();
+
 struct World {
   std::string name;
   std::vector<Vec2> outline;  // closed orthogonal polygon (the room)
@@ -50,7 +54,9 @@ struct World {
 };
 
 // Parses a world file's text; on error returns nullopt and a one-line *error
-// naming the field.
+// naming the field. Unknown keys are rejected by name (a typo such as "objcts"
+// must not give an empty room), and so are impossible worlds: a box outside the
+// room, a start pose outside the room or inside a box.
 std::optional<World> ParseWorld(std::string_view text, std::string* error);
 std::optional<World> LoadWorldFile(const std::string& path, std::string* error);
 
@@ -63,4 +69,4 @@ double PointSegmentDistance(Vec2 p, const Segment& s, Vec2* closest);
 
 }  // namespace irslam::sim
 
-#endif  // IRSLAM_TESTS_SIM_WORLD_H_
+#endif  // IRSLAM_SIM_WORLD_H_
