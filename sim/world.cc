@@ -65,6 +65,14 @@ options::Table<SimNoise> SimNoiseKeys() {
       {"ir_period_s", &N::ir_period_s, 0.005, 1, "s", "IR measurement period"},
       {"ir_period_jitter_s", &N::ir_period_jitter_s, 0, 1, "s", "IR measurement period jitter"},
       {"ir_beam_deg", &N::ir_beam_deg, 0, 90, "deg", "IR beam width"},
+      {"wheel_base_error", &N::wheel_base_error, -0.5, 0.5, "", "relative error of the true track width"},
+      {"slip_correlation_s", &N::slip_correlation_s, 0, 60, "s",
+       "> 0: slip correlated over this time and growing in turns (carpet); 0: white per step"},
+      {"ir_surface_bias_m", &N::ir_surface_bias_m, 0, 0.5, "m",
+       "each wall and object face gets a fixed range bias drawn from +- this"},
+      {"ir_max_incidence_deg", &N::ir_max_incidence_deg, 10, 90, "deg",
+       "returns beyond this incidence angle drop out; noise grows as 1/cos(incidence)"},
+      {"ir_outlier_rate", &N::ir_outlier_rate, 0, 1, "", "fraction of readings that are a uniform random range"},
   };
   return kKeys;
 }
@@ -213,10 +221,11 @@ std::optional<World> LoadWorldFile(const std::string& path, std::string* error) 
 }
 
 std::optional<double> RayCast(const std::vector<Segment>& segs, Vec2 p, double angle,
-                              double max_range) {
+                              double max_range, size_t* hit) {
   const double dx = std::cos(angle), dy = std::sin(angle);
   std::optional<double> best;
-  for (const Segment& s : segs) {
+  for (size_t i = 0; i < segs.size(); ++i) {
+    const Segment& s = segs[i];
     const double ex = s.b.x - s.a.x, ey = s.b.y - s.a.y;
     const double den = dx * ey - dy * ex;
     if (std::abs(den) < 1e-12) continue;
@@ -224,7 +233,10 @@ std::optional<double> RayCast(const std::vector<Segment>& segs, Vec2 p, double a
     const double t = (wx * ey - wy * ex) / den;  // along the ray
     const double u = (wx * dy - wy * dx) / den;  // along the segment
     if (t < 0 || u < 0 || u > 1 || t > max_range) continue;
-    if (!best || t < *best) best = t;
+    if (!best || t < *best) {
+      best = t;
+      if (hit != nullptr) *hit = i;
+    }
   }
   return best;
 }

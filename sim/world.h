@@ -35,6 +35,15 @@ struct SimNoise {
   double ir_period_s = 0.038;
   double ir_period_jitter_s = 0.004;
   double ir_beam_deg = 5.0;
+  // The realistic error envelope (issue 11; docs/robustness.md says where each
+  // magnitude comes from). The defaults switch every effect off.
+  double wheel_base_error = 0;       // relative error of the true track width
+  double slip_correlation_s = 0;     // > 0: slip is correlated over this time (carpet), not
+                                     // white per step, and grows with the turn rate
+  double ir_surface_bias_m = 0;      // each wall and face: a fixed range bias in +- this
+  double ir_max_incidence_deg = 90;  // returns beyond this incidence drop out; noise grows
+                                     // as 1/cos(incidence) below it (90: off)
+  double ir_outlier_rate = 0;        // this fraction of readings is a uniform random range
 };
 
 // The world file's "noise" keys (contracts.md §1 and §7), with bounds and docs.
@@ -61,9 +70,9 @@ std::optional<World> ParseWorld(std::string_view text, std::string* error);
 std::optional<World> LoadWorldFile(const std::string& path, std::string* error);
 
 // Ray cast: distance along the ray from p in direction angle to the nearest
-// segment, or nullopt within max_range.
+// segment, or nullopt within max_range; *hit gets that segment's index.
 std::optional<double> RayCast(const std::vector<Segment>& segs, Vec2 p, double angle,
-                              double max_range);
+                              double max_range, size_t* hit = nullptr);
 // Distance from a point to a segment.
 double PointSegmentDistance(Vec2 p, const Segment& s, Vec2* closest);
 
