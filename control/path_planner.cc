@@ -7,9 +7,22 @@
 namespace irslam::control {
 namespace {
 
-double SegmentDistance(const Eigen::Vector2d& p, const Obstacle& o) { return (p - ClosestPoint(o, p)).norm(); }
+double SegmentDistance(const Eigen::Vector2d& p, const Obstacle& o) {
+  return (p - ClosestPoint(o, p)).norm();
+}
 
 }  // namespace
+
+options::Table<PlannerOptions> PlannerKeys() {
+  using O = PlannerOptions;
+  static constexpr options::Key<O> kKeys[] = {
+      {"planner_resolution_m", &O::resolution_m, 0.01, 1, "m",
+       "cell size of the go-to's planning grid"},
+      {"planner_margin_m", &O::margin_m, 0, 10, "m",
+       "the planning grid extends this far beyond the obstacles"},
+  };
+  return kKeys;
+}
 
 Eigen::Vector2d ClosestPoint(const Obstacle& o, const Eigen::Vector2d& p) {
   const Eigen::Vector2d d = o.b - o.a;
@@ -18,55 +31,54 @@ Eigen::Vector2d ClosestPoint(const Obstacle& o, const Eigen::Vector2d& p) {
   return o.a + u * d;
 }
 
-std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>& obstacles,
-                                                     const Eigen::Vector2d& start,
-                                                     const Eigen::Vector2d& goal,
-                                                     const PlannerOptions& o) {
-  Eigen::Vector2d lo = start.cwiseMin(goal), hi = start.cwiseMax(goal);
-  for (const auto& ob : obstacles) {
-    lo = lo.cwiseMin(ob.a).cwiseMin(ob.b);
-    hi = hi.cwiseMax(ob.a).cwiseMax(ob.b);
+namespace {
+
+// The planning grid: cells of resolution_m from lo, nx by ny.
+struct Grid {
+  Eigen::Vector2d lo;
+  int nx = 0, ny = 0;
+  double res = 0;
+  Eigen::Vector2d Centre(int ix, int iy) const {
+    return Eigen::Vector2d(lo.x() + ix * res, lo.y() + iy * res);
   }
-  lo.array() -= o.margin_m;
-  hi.array() += o.margin_m;
-  const int nx = static_cast<int>(std::ceil((hi.x() - lo.x()) / o.resolution_m)) + 1;
-  const int ny = static_cast<int>(std::ceil((hi.y() - lo.y()) / o.resolution_m)) + 1;
-  if (static_cast<long>(nx) * ny > 4'000'000) return std::nullopt;
-  const auto centre = [&](int ix, int iy) {
-    return Eigen::Vector2d(lo.x() + ix * o.resolution_m, lo.y() + iy * o.resolution_m);
-  };
-  const auto cell = [&](const Eigen::Vector2d& p) {
-    return std::pair<int, int>{static_cast<int>(std::lround((p.x() - lo.x()) / o.resolution_m)),
-                               static_cast<int>(std::lround((p.y() - lo.y()) / o.resolution_m))};
-  };
-  // Clearance of each cell: the distance to the nearest obstacle, up to the inflation.
-  std::vector<float> clear(static_cast<size_t>(nx * ny), static_cast<float>(o.inflation_m));
+  std::pair<int, int> Cell(const Eigen::Vector2d& p) const {
+    return {static_cast<int>(std::lround((p.x() - lo.x()) / res)),
+            static_cast<int>(std::lround((p.y() - lo.y()) / res))};
+  }
+};
+
+// Clearance of each cell: the distance to the nearest obstacle, up to the inflation.
+std::vector<float> Clearances(const std::vector<Obstacle>& obstacles, const Grid& grid,
+                              double inflation_m) {
+  const int nx = grid.nx, ny = grid.ny;
+  std::vector<float> clear(static_cast<size_t>(nx * ny), static_cast<float>(inflation_m));
   for (const auto& ob : obstacles) {
     // Only cells near the obstacle's bounding box can be blocked by it.
-    const Eigen::Vector2d a = ob.a.cwiseMin(ob.b).array() - o.inflation_m;
-    const Eigen::Vector2d b = ob.a.cwiseMax(ob.b).array() + o.inflation_m;
-    const auto [x0, y0] = cell(a);
-    const auto [x1, y1] = cell(b);
+    const Eigen::Vector2d a = ob.a.cwiseMin(ob.b).array() - inflation_m;
+    const Eigen::Vector2d b = ob.a.cwiseMax(ob.b).array() + inflation_m;
+    const auto [x0, y0] = grid.Cell(a);
+    const auto [x1, y1] = grid.Cell(b);
     for (int ix = std::max(0, x0); ix <= std::min(nx - 1, x1); ++ix) {
       for (int iy = std::max(0, y0); iy <= std::min(ny - 1, y1); ++iy) {
         auto& c = clear[static_cast<size_t>(iy * nx + ix)];
-        c = std::min(c, static_cast<float>(SegmentDistance(centre(ix, iy), ob)));
+        c = std::min(c, static_cast<float>(SegmentDistance(grid.Centre(ix, iy), ob)));
       }
     }
   }
-  const auto [sx, sy] = cell(start);
-  const auto [gx, gy] = cell(goal);
-  if (gx < 0 || gy < 0 || gx >= nx || gy >= ny || clear[static_cast<size_t>(gy * nx + gx)] < o.inflation_m) {
-    return std::nullopt;
-  }
+  return clear;
+}
+
+// A* (8-connected) from cell (sx, sy) to (gx, gy): each cell's predecessor (-1: none).
+std::vector<int> Search(const Grid& grid, const std::vector<float>& clear, int sx, int sy, int gx,
+                        int gy, const PlannerOptions& o) {
+  const int nx = grid.nx, ny = grid.ny;
   const int n = nx * ny;
   std::vector<double> g(static_cast<size_t>(n), 1e18);
   std::vector<int> from(static_cast<size_t>(n), -1);
   using Item = std::pair<double, int>;
   std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
   const int s = sy * nx + sx, goal_i = gy * nx + gx;
-  // (Structured bindings are not captured by lambdas in every C++20 compiler.)
-  const auto h = [&, goal_x = gx, goal_y = gy](int i) { return std::hypot(i % nx - goal_x, i / nx - goal_y); };
+  const auto h = [&](int i) { return std::hypot(i % nx - gx, i / nx - gy); };
   g[static_cast<size_t>(s)] = 0;
   open.push({h(s), s});
   const int dx[8] = {1, -1, 0, 0, 1, 1, -1, -1}, dy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
@@ -85,7 +97,8 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
       // robot may stand that close to where a mapped side is assumed to go on).
       const float cj = clear[static_cast<size_t>(j)];
       if (cj < o.inflation_m) {
-        if (std::hypot(jx - sx, jy - sy) * o.resolution_m > o.inflation_m + o.resolution_m) continue;
+        if (std::hypot(jx - sx, jy - sy) * o.resolution_m > o.inflation_m + o.resolution_m)
+          continue;
         if (cj < o.hard_m && cj < clear[static_cast<size_t>(i)]) continue;
       }
       const double c = g[static_cast<size_t>(i)] + (k < 4 ? 1.0 : M_SQRT2);
@@ -96,9 +109,42 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
       }
     }
   }
+  return from;
+}
+
+}  // namespace
+
+std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>& obstacles,
+                                                     const Eigen::Vector2d& start,
+                                                     const Eigen::Vector2d& goal,
+                                                     const PlannerOptions& o) {
+  Eigen::Vector2d lo = start.cwiseMin(goal), hi = start.cwiseMax(goal);
+  for (const auto& ob : obstacles) {
+    lo = lo.cwiseMin(ob.a).cwiseMin(ob.b);
+    hi = hi.cwiseMax(ob.a).cwiseMax(ob.b);
+  }
+  lo.array() -= o.margin_m;
+  hi.array() += o.margin_m;
+  Grid grid;
+  grid.lo = lo;
+  grid.res = o.resolution_m;
+  grid.nx = static_cast<int>(std::ceil((hi.x() - lo.x()) / o.resolution_m)) + 1;
+  grid.ny = static_cast<int>(std::ceil((hi.y() - lo.y()) / o.resolution_m)) + 1;
+  const int nx = grid.nx, ny = grid.ny;
+  if (static_cast<long>(nx) * ny > 4'000'000) return std::nullopt;
+  const std::vector<float> clear = Clearances(obstacles, grid, o.inflation_m);
+  const auto [sx, sy] = grid.Cell(start);
+  const auto [gx, gy] = grid.Cell(goal);
+  if (gx < 0 || gy < 0 || gx >= nx || gy >= ny ||
+      clear[static_cast<size_t>(gy * nx + gx)] < o.inflation_m) {
+    return std::nullopt;
+  }
+  const std::vector<int> from = Search(grid, clear, sx, sy, gx, gy, o);
+  const int s = sy * nx + sx, goal_i = gy * nx + gx;
   if (from[static_cast<size_t>(goal_i)] < 0 && goal_i != s) return std::nullopt;
   std::vector<Eigen::Vector2d> cells;
-  for (int i = goal_i; i != -1; i = from[static_cast<size_t>(i)]) cells.push_back(centre(i % nx, i / nx));
+  for (int i = goal_i; i != -1; i = from[static_cast<size_t>(i)])
+    cells.push_back(grid.Centre(i % nx, i / nx));
   std::reverse(cells.begin(), cells.end());
   // Keep the corners only.
   std::vector<Eigen::Vector2d> path = {start};

@@ -8,6 +8,8 @@
 #include <optional>
 #include <vector>
 
+#include "types/options.h"
+
 namespace irslam::control {
 
 struct PlannerOptions {
@@ -19,6 +21,10 @@ struct PlannerOptions {
                               // moving away from the obstacle
   double margin_m = 1.0;      // grid extends this far beyond the obstacles
 };
+// The planner's configurable keys (resolution and margin; the go-to sets the
+// inflation and hard distance from the robot radius and its clearances, so they
+// are no keys). Section [exploration], as planner_*.
+options::Table<PlannerOptions> PlannerKeys();
 
 struct Obstacle {
   Eigen::Vector2d a, b;  // a segment (a == b: a point)

@@ -5,79 +5,49 @@
 #include <numeric>
 #include <optional>
 
+#include "control/room_geometry.h"
+
 namespace irslam::control {
 namespace {
 
-// An axis-aligned view of a mapped line.
-struct Side {
-  int id = 0;
-  bool horizontal = false;  // y = c, extent in x; else x = c, extent in y
-  double c = 0, a0 = 0, a1 = 0;
-  int seen_from = 0;        // +1: seen from the greater-coordinate side, -1: from the lesser
-  Eigen::Vector2d End(int k) const {
-    const double a = k == 0 ? a0 : a1;
-    return horizontal ? Eigen::Vector2d(a, c) : Eigen::Vector2d(c, a);
-  }
-};
+using room_geometry::CornerEnd;
+using room_geometry::FaceBox;
+using room_geometry::InsidePolygon;
+using room_geometry::MakeCorner;
+using room_geometry::Meets;
+using room_geometry::Overlap1d;
+using room_geometry::Side;
+using room_geometry::ToSides;
 
 int Find(std::vector<int>& parent, int i) {
-  while (parent[static_cast<size_t>(i)] != i) i = parent[static_cast<size_t>(i)] = parent[static_cast<size_t>(parent[static_cast<size_t>(i)])];
+  while (parent[static_cast<size_t>(i)] != i)
+    i = parent[static_cast<size_t>(i)] =
+        parent[static_cast<size_t>(parent[static_cast<size_t>(i)])];
   return i;
-}
-
-double Overlap1d(double a0, double a1, double b0, double b1) {
-  return std::min(a1, b1) - std::max(a0, b0);
-}
-
-// The object's box from its faces. A side's offset is its best-known coordinate
-// (the EKF estimates it from every point along the side), while its end points
-// are where the beams stopped hitting it (short of the corner, or past it by the
-// noise): so each edge of the box is the outermost side facing that way - a
-// vertical side seen from the left for xmin, and so on - and the extreme end
-// point only where no side faces that way (an open, unseen face), or where the
-// ends reach well beyond every face (compound furniture, seen in part).
-Box FaceBox(const std::vector<Side>& sides, const std::vector<size_t>& group, const Box& ends) {
-  constexpr double kBeyond = 0.10;  // ends this far past a face: that face is not the edge
-  Box b = ends;
-  std::optional<double> xmin, xmax, ymin, ymax;
-  for (size_t i : group) {
-    const Side& s = sides[i];
-    auto& lo = s.horizontal ? ymin : xmin;
-    auto& hi = s.horizontal ? ymax : xmax;
-    if (s.seen_from < 0) lo = lo ? std::min(*lo, s.c) : s.c;
-    if (s.seen_from > 0) hi = hi ? std::max(*hi, s.c) : s.c;
-  }
-  // Without a face that way: the mean of the ends that reach the extreme (one
-  // end alone may be past the corner by the noise, another short of it).
-  const auto mean_end = [&](bool horizontal_sides, bool high, double extreme) {
-    double sum = 0;
-    int n = 0;
-    for (size_t i : group) {
-      const Side& s = sides[i];
-      // The extreme is a side's own offset (a face, seen from wherever): keep it.
-      if (s.horizontal != horizontal_sides && std::abs(s.c - extreme) < 1e-9) return extreme;
-    }
-    for (size_t i : group) {
-      const Side& s = sides[i];
-      if (s.horizontal != horizontal_sides) continue;
-      const double e = high ? s.a1 : s.a0;
-      if (std::abs(e - extreme) < kBeyond) {
-        sum += e;
-        ++n;
-      }
-    }
-    return n > 0 ? sum / n : extreme;
-  };
-  b.xmin = xmin && *xmin < ends.xmin + kBeyond ? *xmin : mean_end(true, false, ends.xmin);
-  b.ymin = ymin && *ymin < ends.ymin + kBeyond ? *ymin : mean_end(false, false, ends.ymin);
-  b.xmax = xmax && *xmax > ends.xmax - kBeyond ? *xmax : mean_end(true, true, ends.xmax);
-  b.ymax = ymax && *ymax > ends.ymax - kBeyond ? *ymax : mean_end(false, true, ends.ymax);
-  return b;
 }
 
 }  // namespace
 
-const char* ToString(ObjectKind k) { return k == ObjectKind::kWallContact ? "wall_contact" : "free"; }
+options::Table<ModelOptions> ModelKeys() {
+  using O = ModelOptions;
+  static constexpr options::Key<O> kKeys[] = {
+      {"axis_tolerance_rad", &O::axis_tolerance_rad, 0.001, 0.7, "rad",
+       "lines this close to an axis count as axis-aligned"},
+      {"collinear_m", &O::collinear_m, 0.001, 1, "m",
+       "pieces of one wall or side: offsets within this"},
+      {"corner_m", &O::corner_m, 0.01, 2, "m",
+       "two sides meet: their corner within this of an end"},
+      {"wall_contact_m", &O::wall_contact_m, 0.01, 2, "m",
+       "an object this close to a wall touches it"},
+      {"wall_reach_m", &O::wall_reach_m, 0, 2, "m",
+       "a side ending this close to a wall (along it) runs into it"},
+  };
+  return kKeys;
+}
+
+const char* ToString(ObjectKind k) {
+  return k == ObjectKind::kWallContact ? "wall_contact" : "free";
+}
 
 int EnvironmentModel::pending() const {
   int n = 0;
@@ -98,24 +68,6 @@ bool Modeler::CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& 
   return false;
 }
 
-namespace {
-
-// Even-odd rule.
-bool InsidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
-  bool in = false;
-  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
-    const Eigen::Vector2d& a = poly[i];
-    const Eigen::Vector2d& b = poly[j];
-    if ((a.y() > p.y()) != (b.y() > p.y()) &&
-        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x()) {
-      in = !in;
-    }
-  }
-  return in;
-}
-
-}  // namespace
-
 void Modeler::GiveUp(int object_id, const std::string& why) {
   given_up_.emplace_back(object_id, why);
   for (auto& o : model_.objects) {
@@ -126,44 +78,14 @@ void Modeler::GiveUp(int object_id, const std::string& why) {
   }
 }
 
-const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& lines,
-                                        const std::vector<TimedPose>& trajectory) {
-  const auto& o = options_;
-  std::vector<Side> sides;
-  for (const auto& l : lines) {
-    const double t = l.theta;
-    Side s;
-    s.id = l.id;
-    if (std::abs(std::remainder(t - M_PI / 2, M_PI)) < o.axis_tolerance_rad) {
-      s.horizontal = true;
-      s.c = 0.5 * (l.p0.y() + l.p1.y());
-      s.a0 = std::min(l.p0.x(), l.p1.x());
-      s.a1 = std::max(l.p0.x(), l.p1.x());
-    } else if (std::abs(std::remainder(t, M_PI)) < o.axis_tolerance_rad) {
-      s.c = 0.5 * (l.p0.x() + l.p1.x());
-      s.a0 = std::min(l.p0.y(), l.p1.y());
-      s.a1 = std::max(l.p0.y(), l.p1.y());
-    } else {
-      continue;
-    }
-    // Which side the robot saw it from: the trajectory point nearest its middle.
-    const Eigen::Vector2d mid = 0.5 * (l.p0 + l.p1);
-    double best = 1e18;
-    for (const auto& p : trajectory) {
-      const double d = std::hypot(p.pose.x - mid.x(), p.pose.y - mid.y());
-      if (d < best) {
-        best = d;
-        const double coord = s.horizontal ? p.pose.y : p.pose.x;
-        s.seen_from = coord >= s.c ? +1 : -1;
-      }
-    }
-    sides.push_back(s);
-  }
+namespace {
 
-  EnvironmentModel m;
-  // The Room: the outermost sides seen from inside. Bottom: horizontal, seen from
-  // above, lowest; top: seen from below, highest; left/right likewise in x.
-  std::vector<bool> is_wall(sides.size(), false);
+// The Room: the outermost sides seen from inside. Bottom: horizontal, seen from
+// above, lowest; top: seen from below, highest; left/right likewise in x. Marks
+// the sides that are walls.
+RoomModel FindRoom(const std::vector<Side>& sides, double collinear_m, std::vector<bool>* is_wall) {
+  RoomModel room;
+  is_wall->assign(sides.size(), false);
   const auto pick = [&](bool horizontal, int seen_from, int wall_index) -> std::optional<double> {
     std::optional<double> extreme;
     for (const auto& s : sides) {
@@ -173,9 +95,10 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
     if (!extreme) return std::nullopt;
     for (size_t i = 0; i < sides.size(); ++i) {
       const auto& s = sides[i];
-      if (s.horizontal == horizontal && s.seen_from == seen_from && std::abs(s.c - *extreme) < o.collinear_m) {
-        is_wall[i] = true;
-        m.room.walls[static_cast<size_t>(wall_index)].push_back(s.id);
+      if (s.horizontal == horizontal && s.seen_from == seen_from &&
+          std::abs(s.c - *extreme) < collinear_m) {
+        (*is_wall)[i] = true;
+        room.walls[static_cast<size_t>(wall_index)].push_back(s.id);
       }
     }
     return extreme;
@@ -185,49 +108,38 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
   const auto top = pick(true, -1, 2);
   const auto left = pick(false, +1, 3);
   if (bottom && right && top && left && *left < *right && *bottom < *top) {
-    m.room.box = Box{*left, *bottom, *right, *top};
+    room.box = Box{*left, *bottom, *right, *top};
   }
+  return room;
+}
 
-  // Objects: the other sides, grouped where they meet (corners, or collinear pieces).
+// The sides that are not walls, grouped into objects where they meet (or lie
+// inside one contour loop); side_in_loop: per side, inside a contour loop.
+std::vector<std::vector<size_t>> GroupObjects(
+    const std::vector<Side>& sides, const std::vector<bool>& is_wall,
+    const std::vector<std::vector<Eigen::Vector2d>>& contour_loops, const ModelOptions& o,
+    std::vector<bool>* side_in_loop) {
   std::vector<size_t> rest;
   for (size_t i = 0; i < sides.size(); ++i) {
     if (!is_wall[i]) rest.push_back(i);
   }
-  std::vector<int> parent(rest.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  const auto meets = [&](const Side& a, const Side& b) {
-    if (a.horizontal == b.horizontal) {
-      return std::abs(a.c - b.c) < o.collinear_m && Overlap1d(a.a0, a.a1, b.a0, b.a1) > -o.corner_m;
-    }
-    const Side& h = a.horizontal ? a : b;
-    const Side& v = a.horizontal ? b : a;
-    // Corner (v.c, h.c) near an end of both.
-    const bool near_h = std::min(std::abs(v.c - h.a0), std::abs(v.c - h.a1)) < o.corner_m ||
-                        (v.c > h.a0 && v.c < h.a1);
-    const bool near_v = std::min(std::abs(h.c - v.a0), std::abs(h.c - v.a1)) < o.corner_m ||
-                        (h.c > v.a0 && h.c < v.a1);
-    const double end_h = std::min(std::abs(v.c - h.a0), std::abs(v.c - h.a1));
-    const double end_v = std::min(std::abs(h.c - v.a0), std::abs(h.c - v.a1));
-    if (near_h && near_v && (end_h < o.corner_m || end_v < o.corner_m)) return true;
-    // One side ends right at the corner, the other was seen short of it (its end
-    // passed on a corner arc): still one object.
-    const double tight = 0.1, loose = 1.5 * o.corner_m;
-    return (end_h < tight && (end_v < loose || (h.c > v.a0 && h.c < v.a1))) ||
-           (end_v < tight && (end_h < loose || (v.c > h.a0 && v.c < h.a1)));
-  };
   // Sides inside one contour loop the robot has gone all round are one object.
   std::vector<int> loop_of(rest.size(), -1);
   for (size_t i = 0; i < rest.size(); ++i) {
     const Side& sd = sides[rest[i]];
     const Eigen::Vector2d mid = 0.5 * (sd.End(0) + sd.End(1));
-    for (size_t k = 0; k < contour_loops_.size(); ++k) {
-      if (InsidePolygon(contour_loops_[k], mid)) loop_of[i] = static_cast<int>(k);
+    for (size_t k = 0; k < contour_loops.size(); ++k) {
+      if (InsidePolygon(contour_loops[k], mid)) loop_of[i] = static_cast<int>(k);
     }
   }
+  std::vector<int> parent(rest.size());
+  std::iota(parent.begin(), parent.end(), 0);
   for (size_t i = 0; i < rest.size(); ++i) {
     for (size_t j = i + 1; j < rest.size(); ++j) {
-      if ((loop_of[i] >= 0 && loop_of[i] == loop_of[j]) || meets(sides[rest[i]], sides[rest[j]])) {
-        parent[static_cast<size_t>(Find(parent, static_cast<int>(i)))] = Find(parent, static_cast<int>(j));
+      if ((loop_of[i] >= 0 && loop_of[i] == loop_of[j]) ||
+          Meets(sides[rest[i]], sides[rest[j]], o)) {
+        parent[static_cast<size_t>(Find(parent, static_cast<int>(i)))] =
+            Find(parent, static_cast<int>(j));
       }
     }
   }
@@ -241,98 +153,114 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
     }
     groups[static_cast<size_t>(group_of[static_cast<size_t>(root)])].push_back(rest[i]);
   }
+  side_in_loop->assign(sides.size(), false);
+  for (size_t i = 0; i < rest.size(); ++i) (*side_in_loop)[rest[i]] = loop_of[i] >= 0;
+  return groups;
+}
 
+// Open ends: a line end that meets neither another side of the object
+// (orthogonal, at a corner; or collinear) nor a wall of the room. touches_wall:
+// set if an end was closed by a wall.
+int OpenEnds(const std::vector<Side>& sides, const std::vector<size_t>& g, const RoomModel& room,
+             const ModelOptions& o, bool* touches_wall) {
   const auto near_wall = [&](const Eigen::Vector2d& p) {
-    if (!m.room.box) return false;
-    const Box& r = *m.room.box;
-    return std::abs(p.x() - r.xmin) < o.wall_contact_m || std::abs(p.x() - r.xmax) < o.wall_contact_m ||
-           std::abs(p.y() - r.ymin) < o.wall_contact_m || std::abs(p.y() - r.ymax) < o.wall_contact_m;
+    if (!room.box) return false;
+    const Box& r = *room.box;
+    return std::abs(p.x() - r.xmin) < o.wall_contact_m ||
+           std::abs(p.x() - r.xmax) < o.wall_contact_m ||
+           std::abs(p.y() - r.ymin) < o.wall_contact_m ||
+           std::abs(p.y() - r.ymax) < o.wall_contact_m;
   };
-  std::vector<bool> side_in_loop(sides.size(), false);
-  for (size_t i = 0; i < rest.size(); ++i) side_in_loop[rest[i]] = loop_of[i] >= 0;
-  std::vector<bool> group_in_loop;
-  for (const auto& g : groups) {
-    ObjectModel obj;
-    group_in_loop.push_back(std::any_of(g.begin(), g.end(), [&](size_t i) { return side_in_loop[i]; }));
-    Box b{1e18, 1e18, -1e18, -1e18};
-    for (size_t i : g) {
-      const Side& s = sides[i];
-      obj.lines.push_back(s.id);
-      for (int k = 0; k < 2; ++k) {
-        const Eigen::Vector2d e = s.End(k);
-        b.xmin = std::min(b.xmin, e.x());
-        b.xmax = std::max(b.xmax, e.x());
-        b.ymin = std::min(b.ymin, e.y());
-        b.ymax = std::max(b.ymax, e.y());
-      }
-    }
-    // Open ends: a line end that meets neither another side of the object
-    // (orthogonal, at a corner; or collinear) nor a wall of the room.
-    bool touches_wall = false;
-    for (size_t i : g) {
-      const Side& s = sides[i];
-      for (int k = 0; k < 2; ++k) {
-        const Eigen::Vector2d e = s.End(k);
-        bool closed = false;
-        for (size_t j : g) {
-          if (j == i) continue;
-          const Side& t = sides[j];
-          if (t.horizontal != s.horizontal) {
-            const Eigen::Vector2d corner = s.horizontal ? Eigen::Vector2d(t.c, s.c) : Eigen::Vector2d(s.c, t.c);
-            // The corner's position along t is s's offset.
-            const bool within_t = s.c > t.a0 - o.corner_m && s.c < t.a1 + o.corner_m;
-            if ((corner - e).norm() < o.corner_m && within_t) closed = true;
-            // One of the two sides ends right at the corner and the other was
-            // seen short of it (its end passed on a corner arc): as in `meets`.
-            const double t_end = std::min((t.End(0) - corner).norm(), (t.End(1) - corner).norm());
-            const double e_end = (corner - e).norm();
-            if ((t_end < 0.1 && e_end < 1.5 * o.corner_m) || (e_end < 0.1 && t_end < 1.5 * o.corner_m)) closed = true;
-          } else if (std::abs(t.c - s.c) < o.collinear_m &&
-                     std::min((t.End(0) - e).norm(), (t.End(1) - e).norm()) < o.corner_m) {
-            closed = true;
-          }
-        }
-        if (!closed && near_wall(e)) {
+  int open = 0;
+  for (size_t i : g) {
+    const Side& s = sides[i];
+    for (int k = 0; k < 2; ++k) {
+      const Eigen::Vector2d e = s.End(k);
+      bool closed = false;
+      for (size_t j : g) {
+        if (j == i) continue;
+        const Side& t = sides[j];
+        if (t.horizontal != s.horizontal) {
+          // The corner rule, for this end of s (the corner's position along t
+          // is s's offset).
+          const Eigen::Vector2d corner =
+              s.horizontal ? Eigen::Vector2d(t.c, s.c) : Eigen::Vector2d(s.c, t.c);
+          const CornerEnd this_end{(corner - e).norm(), false};
+          const CornerEnd along_t{std::min((t.End(0) - corner).norm(), (t.End(1) - corner).norm()),
+                                  s.c > t.a0 && s.c < t.a1};
+          if (MakeCorner(this_end, along_t, o.corner_m)) closed = true;
+        } else if (std::abs(t.c - s.c) < o.collinear_m &&
+                   std::min((t.End(0) - e).norm(), (t.End(1) - e).norm()) < o.corner_m) {
           closed = true;
-          touches_wall = true;
         }
-        if (!closed && m.room.box) {
-          // A side running into a wall: the inner corner it makes with the wall
-          // is seen from the follow distance at best, so its end is seen short
-          // of the wall - by up to wall_reach_m.
-          const Box& r = *m.room.box;
-          const double along = s.horizontal ? e.x() : e.y();
-          const double lo = s.horizontal ? r.xmin : r.ymin, hi = s.horizontal ? r.xmax : r.ymax;
-          const bool toward_lo = k == 0, toward_hi = k == 1;  // a0 <= a1: end 0 is the lower one
-          if ((toward_lo && along - lo < o.wall_reach_m) || (toward_hi && hi - along < o.wall_reach_m)) {
-            closed = true;
-            touches_wall = true;
-          }
-        }
-        obj.open_ends += closed ? 0 : 1;
       }
+      if (!closed && near_wall(e)) {
+        closed = true;
+        *touches_wall = true;
+      }
+      if (!closed && room.box) {
+        // A side running into a wall: the inner corner it makes with the wall
+        // is seen from the follow distance at best, so its end is seen short
+        // of the wall - by up to wall_reach_m.
+        const Box& r = *room.box;
+        const double along = s.horizontal ? e.x() : e.y();
+        const double lo = s.horizontal ? r.xmin : r.ymin, hi = s.horizontal ? r.xmax : r.ymax;
+        const bool toward_lo = k == 0, toward_hi = k == 1;  // a0 <= a1: end 0 is the lower one
+        if ((toward_lo && along - lo < o.wall_reach_m) ||
+            (toward_hi && hi - along < o.wall_reach_m)) {
+          closed = true;
+          *touches_wall = true;
+        }
+      }
+      open += closed ? 0 : 1;
     }
-    // The walls the box lies against: their sides are never seen (one wall: 3
-    // sides to map; in a corner of the room, two walls: 2).
-    const size_t walls_touched =
-        m.room.box ? static_cast<size_t>(std::abs(b.xmin - m.room.box->xmin) < o.wall_contact_m) +
-                         static_cast<size_t>(std::abs(b.xmax - m.room.box->xmax) < o.wall_contact_m) +
-                         static_cast<size_t>(std::abs(b.ymin - m.room.box->ymin) < o.wall_contact_m) +
-                         static_cast<size_t>(std::abs(b.ymax - m.room.box->ymax) < o.wall_contact_m)
-                   : 0;
-    obj.kind = (touches_wall || walls_touched > 0) ? ObjectKind::kWallContact : ObjectKind::kFree;
-    const size_t needed = obj.kind == ObjectKind::kWallContact ? std::max<size_t>(2, 4 - std::min<size_t>(walls_touched, 2))
-                                                               : 4;
-    obj.complete = obj.open_ends == 0 && obj.lines.size() >= needed;
-    obj.box = FaceBox(sides, g, b);
-    std::sort(obj.lines.begin(), obj.lines.end());
-    m.objects.push_back(obj);
   }
+  return open;
+}
 
+// One object from its group of sides: lines, box, open ends, kind, complete.
+ObjectModel BuildObject(const std::vector<Side>& sides, const std::vector<size_t>& g,
+                        const RoomModel& room, const ModelOptions& o) {
+  ObjectModel obj;
+  Box b{1e18, 1e18, -1e18, -1e18};
+  for (size_t i : g) {
+    const Side& s = sides[i];
+    obj.lines.push_back(s.id);
+    for (int k = 0; k < 2; ++k) {
+      const Eigen::Vector2d e = s.End(k);
+      b.xmin = std::min(b.xmin, e.x());
+      b.xmax = std::max(b.xmax, e.x());
+      b.ymin = std::min(b.ymin, e.y());
+      b.ymax = std::max(b.ymax, e.y());
+    }
+  }
+  bool touches_wall = false;
+  obj.open_ends = OpenEnds(sides, g, room, o, &touches_wall);
+  // The walls the box lies against: their sides are never seen (one wall: 3
+  // sides to map; in a corner of the room, two walls: 2).
+  const size_t walls_touched =
+      room.box ? static_cast<size_t>(std::abs(b.xmin - room.box->xmin) < o.wall_contact_m) +
+                     static_cast<size_t>(std::abs(b.xmax - room.box->xmax) < o.wall_contact_m) +
+                     static_cast<size_t>(std::abs(b.ymin - room.box->ymin) < o.wall_contact_m) +
+                     static_cast<size_t>(std::abs(b.ymax - room.box->ymax) < o.wall_contact_m)
+               : 0;
+  obj.kind = (touches_wall || walls_touched > 0) ? ObjectKind::kWallContact : ObjectKind::kFree;
+  const size_t needed = obj.kind == ObjectKind::kWallContact
+                            ? std::max<size_t>(2, 4 - std::min<size_t>(walls_touched, 2))
+                            : 4;
+  obj.complete = obj.open_ends == 0 && obj.lines.size() >= needed;
+  obj.box = FaceBox(sides, g, b);
+  std::sort(obj.lines.begin(), obj.lines.end());
+  return obj;
+}
+
+}  // namespace
+
+void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop) {
   // Stable ids: an object keeps the id of the previous object it overlaps most.
   std::vector<bool> taken(model_.objects.size(), false);
-  for (size_t gi = 0; gi < m.objects.size(); ++gi) {
-    ObjectModel& obj = m.objects[gi];
+  for (size_t gi = 0; gi < m->objects.size(); ++gi) {
+    ObjectModel& obj = m->objects[gi];
     double best = 0;
     int best_k = -1;
     for (size_t k = 0; k < model_.objects.size(); ++k) {
@@ -352,13 +280,13 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
     } else {
       obj.id = next_id_++;
     }
-    const bool contoured = group_in_loop[gi] || std::find(closed_by_contour_.begin(), closed_by_contour_.end(),
-                                                           obj.id) != closed_by_contour_.end();
-    {
-      if (contoured && !obj.complete && obj.lines.size() >= 3) {
-        obj.complete = true;
-        obj.note = "one side inferred from the contour";
-      }
+    // Gone all round (now or in an earlier call): one side is inferred.
+    const bool contoured =
+        group_in_loop[gi] || std::find(closed_by_contour_.begin(), closed_by_contour_.end(),
+                                       obj.id) != closed_by_contour_.end();
+    if (contoured && !obj.complete && obj.lines.size() >= 3) {
+      obj.complete = true;
+      obj.note = "one side inferred from the contour";
     }
     for (const auto& [gid, why] : given_up_) {
       if (gid == obj.id && !obj.complete) {
@@ -368,7 +296,25 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
       }
     }
   }
-  std::sort(m.objects.begin(), m.objects.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+}
+
+const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& lines,
+                                        const std::vector<TimedPose>& trajectory) {
+  const std::vector<Side> sides = ToSides(lines, trajectory, options_.axis_tolerance_rad);
+  EnvironmentModel m;
+  std::vector<bool> is_wall;
+  m.room = FindRoom(sides, options_.collinear_m, &is_wall);
+  std::vector<bool> side_in_loop;
+  const auto groups = GroupObjects(sides, is_wall, contour_loops_, options_, &side_in_loop);
+  std::vector<bool> group_in_loop;
+  for (const auto& g : groups) {
+    group_in_loop.push_back(
+        std::any_of(g.begin(), g.end(), [&](size_t i) { return side_in_loop[i]; }));
+    m.objects.push_back(BuildObject(sides, g, m.room, options_));
+  }
+  AssignIds(&m, group_in_loop);
+  std::sort(m.objects.begin(), m.objects.end(),
+            [](const auto& a, const auto& b) { return a.id < b.id; });
   model_ = std::move(m);
   return model_;
 }

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "slam/slam.h"
+#include "types/options.h"
 
 namespace irslam::control {
 
@@ -25,6 +26,7 @@ struct ModelOptions {
   double wall_contact_m = 0.15;      // an object this close to a wall touches it
   double wall_reach_m = 0.35;        // a side ending this close to a wall (along it) runs into it
 };
+options::Table<ModelOptions> ModelKeys();  // [model]
 
 struct Box {
   double xmin = 0, ymin = 0, xmax = 0, ymax = 0;
@@ -47,8 +49,8 @@ struct ObjectModel {
   std::vector<int> lines;
   bool complete = false;
   Box box;
-  int open_ends = 0;       // line ends that meet no other side (nor a wall)
-  bool given_up = false;   // exploration could not complete it (kept: complete = false)
+  int open_ends = 0;      // line ends that meet no other side (nor a wall)
+  bool given_up = false;  // exploration could not complete it (kept: complete = false)
   std::string note;
 };
 
@@ -81,6 +83,10 @@ class Modeler {
   const EnvironmentModel& model() const { return model_; }
 
  private:
+  // Gives the new model's objects the ids of the old ones they overlap most (new
+  // ids otherwise), and applies closed contours and given-up notes.
+  void AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop);
+
   ModelOptions options_;
   EnvironmentModel model_;
   int next_id_ = 1;

@@ -23,15 +23,48 @@ Point Hit(const SensorMount& m, double r) {
 
 }  // namespace
 
+options::Table<WallFollowerOptions> WallFollowerKeys() {
+  using O = WallFollowerOptions;
+  static constexpr options::Key<O> kKeys[] = {
+      {"follow_distance_m", &O::follow_distance_m, 0.1, 2.0, "m",
+       "robot centre to the wall on the right"},
+      {"cruise_speed_mps", &O::cruise_speed_mps, 0.01, 2.0, "m/s", "speed along a wall"},
+      {"front_stop_m", &O::front_stop_m, 0.1, 2.0, "m",
+       "obstacle this close ahead (from the centre): inner corner"},
+      {"front_slow_m", &O::front_slow_m, 0.1, 3.0, "m", "slow down below this distance ahead"},
+      {"k_distance", &O::k_distance, 0, 100, "rad/s/m", "turn rate per metre of distance error"},
+      {"k_angle", &O::k_angle, 0, 100, "rad/s/rad", "turn rate per radian of wall angle"},
+      {"max_turn_rate_rad_s", &O::max_turn_rate_rad_s, 0.05, 10, "rad/s",
+       "turn rate limit while following"},
+      {"turn_rate_rad_s", &O::turn_rate_rad_s, 0.05, 10, "rad/s",
+       "in-place turns at inner corners"},
+      {"lost_wall_margin_m", &O::lost_wall_margin_m, 0.05, 2.0, "m",
+       "a wall farther than follow distance + this is lost"},
+      {"outer_arc_speed_mps", &O::outer_arc_speed_mps, 0.01, 2.0, "m/s",
+       "speed round outer corners"},
+      {"backoff_speed_mps", &O::backoff_speed_mps, 0.01, 1.0, "m/s", "reverse speed after a bump"},
+      {"backoff_time_s", &O::backoff_time_s, 0.0, 10.0, "s", "reverse for this long after a bump"},
+      {"backoff_turn_rad", &O::backoff_turn_rad, 0.0, 3.2, "rad", "then turn left this much"},
+  };
+  return kKeys;
+}
+
 const char* ToString(FollowMode m) {
   switch (m) {
-    case FollowMode::kFind: return "find_wall";
-    case FollowMode::kAlign: return "align";
-    case FollowMode::kFollow: return "follow";
-    case FollowMode::kInnerCorner: return "inner_corner";
-    case FollowMode::kOuterCorner: return "outer_corner";
-    case FollowMode::kBackoff: return "backoff";
-    case FollowMode::kLeave: return "leave";
+    case FollowMode::kFind:
+      return "find_wall";
+    case FollowMode::kAlign:
+      return "align";
+    case FollowMode::kFollow:
+      return "follow";
+    case FollowMode::kInnerCorner:
+      return "inner_corner";
+    case FollowMode::kOuterCorner:
+      return "outer_corner";
+    case FollowMode::kBackoff:
+      return "backoff";
+    case FollowMode::kLeave:
+      return "leave";
   }
   return "?";
 }
@@ -111,12 +144,19 @@ Twist WallFollower::Step(double t, const RangeScan& scan, bool bumped) {
   last_t_ = t;
   const auto front = FrontDistance(scan);
   const auto wall = RightWall(scan);
+  steady_ = false;
+  if (bumped && mode_ != FollowMode::kBackoff) Enter(FollowMode::kBackoff, t);
+  Twist out = StepMode(t, front, wall, bumped);
+  // (A mode may have switched to following just now: follow at once.)
+  if (mode_ == FollowMode::kFollow) out = Follow(t, front, wall);
+  turned_rad_ += out.omega * dt;
+  return out;
+}
+
+Twist WallFollower::StepMode(double t, std::optional<double> front,
+                             const std::optional<WallEstimate>& wall, bool bumped) {
   const auto& o = options_;
   Twist out;
-  steady_ = false;
-
-  if (bumped && mode_ != FollowMode::kBackoff) Enter(FollowMode::kBackoff, t);
-
   switch (mode_) {
     case FollowMode::kBackoff: {
       const double age = t - mode_since_;
@@ -138,7 +178,8 @@ Twist WallFollower::Step(double t, const RangeScan& scan, bool bumped) {
       out = {0, o.turn_rate_rad_s};
       break;
     case FollowMode::kFind:
-      if ((front && *front < o.follow_distance_m + 0.15) || (wall && wall->distance_m < o.follow_distance_m + 0.1)) {
+      if ((front && *front < o.follow_distance_m + 0.15) ||
+          (wall && wall->distance_m < o.follow_distance_m + 0.1)) {
         Enter(FollowMode::kAlign, t);
         break;
       }
@@ -183,43 +224,47 @@ Twist WallFollower::Step(double t, const RangeScan& scan, bool bumped) {
     case FollowMode::kFollow:
       break;
   }
+  return out;
+}
 
-  if (mode_ == FollowMode::kFollow) {
-    if (front && *front < o.front_stop_m) {
-      Enter(FollowMode::kInnerCorner, t);
-      out = {0, o.turn_rate_rad_s};
-    } else if (!wall) {
-      Enter(FollowMode::kOuterCorner, t);
-      out = {o.outer_arc_speed_mps, 0};
-    } else if (wall->corner && orbit_corners_) {
-      // Only a corner beside the robot (a wall along the right would be seen by
-      // the diagonal sensor too): go round it at the follow distance - the
-      // curvature of that circle, corrected by the distance error - until the
-      // next side comes into view. (Taken as a wall alongside, the corner drew
-      // the robot into wide circles that never came close enough to see the
-      // sides of a small box.)
-      // Only farther than the follow distance, and fully from 5 cm beyond it:
-      // the side sensor may still see the side's end short of the corner, and
-      // turning then would cut the corner.
-      const double v = o.outer_arc_speed_mps;
-      const double err = wall->distance_m - o.follow_distance_m;
-      const double omega = -v / o.follow_distance_m * std::clamp(err / 0.05, 0.0, 1.0) - o.k_distance * err;
-      out = {v, std::clamp(omega, -o.max_turn_rate_rad_s, o.max_turn_rate_rad_s)};
-    } else {
-      steady_ = std::abs(wall->angle_rad) < 0.09 &&
-                std::abs(wall->distance_m - o.follow_distance_m) < 0.05;
-      double omega = o.k_angle * wall->angle_rad -
-                     o.k_distance * (wall->distance_m - o.follow_distance_m);
-      omega = std::clamp(omega, -o.max_turn_rate_rad_s, o.max_turn_rate_rad_s);
-      double v = o.cruise_speed_mps * (1.0 - 0.6 * std::abs(omega) / o.max_turn_rate_rad_s);
-      if (front && *front < o.front_slow_m) {
-        const double f = (*front - o.front_stop_m) / (o.front_slow_m - o.front_stop_m);
-        v *= std::clamp(0.3 + 0.7 * f, 0.3, 1.0);
-      }
-      out = {v, omega};
+Twist WallFollower::Follow(double t, std::optional<double> front,
+                           const std::optional<WallEstimate>& wall) {
+  const auto& o = options_;
+  Twist out;
+  if (front && *front < o.front_stop_m) {
+    Enter(FollowMode::kInnerCorner, t);
+    out = {0, o.turn_rate_rad_s};
+  } else if (!wall) {
+    Enter(FollowMode::kOuterCorner, t);
+    out = {o.outer_arc_speed_mps, 0};
+  } else if (wall->corner && orbit_corners_) {
+    // Only a corner beside the robot (a wall along the right would be seen by
+    // the diagonal sensor too): go round it at the follow distance - the
+    // curvature of that circle, corrected by the distance error - until the
+    // next side comes into view. (Taken as a wall alongside, the corner drew
+    // the robot into wide circles that never came close enough to see the
+    // sides of a small box.)
+    // Only farther than the follow distance, and fully from 5 cm beyond it:
+    // the side sensor may still see the side's end short of the corner, and
+    // turning then would cut the corner.
+    const double v = o.outer_arc_speed_mps;
+    const double err = wall->distance_m - o.follow_distance_m;
+    const double omega =
+        -v / o.follow_distance_m * std::clamp(err / 0.05, 0.0, 1.0) - o.k_distance * err;
+    out = {v, std::clamp(omega, -o.max_turn_rate_rad_s, o.max_turn_rate_rad_s)};
+  } else {
+    steady_ =
+        std::abs(wall->angle_rad) < 0.09 && std::abs(wall->distance_m - o.follow_distance_m) < 0.05;
+    double omega =
+        o.k_angle * wall->angle_rad - o.k_distance * (wall->distance_m - o.follow_distance_m);
+    omega = std::clamp(omega, -o.max_turn_rate_rad_s, o.max_turn_rate_rad_s);
+    double v = o.cruise_speed_mps * (1.0 - 0.6 * std::abs(omega) / o.max_turn_rate_rad_s);
+    if (front && *front < o.front_slow_m) {
+      const double f = (*front - o.front_stop_m) / (o.front_slow_m - o.front_stop_m);
+      v *= std::clamp(0.3 + 0.7 * f, 0.3, 1.0);
     }
+    out = {v, omega};
   }
-  turned_rad_ += out.omega * dt;
   return out;
 }
 

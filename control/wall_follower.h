@@ -10,6 +10,7 @@
 
 #include "slam/slam.h"
 #include "types/geometry.h"
+#include "types/options.h"
 #include "types/signals.h"
 
 namespace irslam::control {
@@ -17,18 +18,19 @@ namespace irslam::control {
 struct WallFollowerOptions {
   double follow_distance_m = 0.40;  // robot centre to the wall on the right
   double cruise_speed_mps = 0.20;
-  double front_stop_m = 0.45;       // obstacle this close ahead (from the centre): inner corner
-  double front_slow_m = 0.80;       // start slowing down below this
-  double k_distance = 2.5;          // rad/s per metre of distance error
-  double k_angle = 2.0;             // rad/s per radian of wall angle
+  double front_stop_m = 0.45;  // obstacle this close ahead (from the centre): inner corner
+  double front_slow_m = 0.80;  // start slowing down below this
+  double k_distance = 2.5;     // rad/s per metre of distance error
+  double k_angle = 2.0;        // rad/s per radian of wall angle
   double max_turn_rate_rad_s = 1.2;
-  double turn_rate_rad_s = 0.8;     // in-place turns at inner corners
-  double lost_wall_margin_m = 0.30; // wall farther than follow + this is "lost"
+  double turn_rate_rad_s = 0.8;      // in-place turns at inner corners
+  double lost_wall_margin_m = 0.30;  // wall farther than follow + this is "lost"
   double outer_arc_speed_mps = 0.12;
   double backoff_speed_mps = 0.08;
   double backoff_time_s = 0.6;
   double backoff_turn_rad = 0.5;
 };
+options::Table<WallFollowerOptions> WallFollowerKeys();  // [wall_follow]
 
 // Which case of the follower is active (shown in status).
 enum class FollowMode { kFind, kAlign, kFollow, kInnerCorner, kOuterCorner, kBackoff, kLeave };
@@ -77,6 +79,11 @@ class WallFollower {
 
  private:
   void Enter(FollowMode m, double t);
+  // The modes other than following: their twist (and mode changes).
+  Twist StepMode(double t, std::optional<double> front, const std::optional<WallEstimate>& wall,
+                 bool bumped);
+  // Following the wall on the right (or leaving following at a corner).
+  Twist Follow(double t, std::optional<double> front, const std::optional<WallEstimate>& wall);
 
   WallFollowerOptions options_;
   std::array<SensorMount, kNumIrSensors> mounts_;

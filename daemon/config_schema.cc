@@ -4,14 +4,6 @@
 #include <string>
 #include <vector>
 
-namespace irslam::control {
-// TEMPORARY (daemon/control_keys_tmp.cc) until control/ declares its own tables.
-options::Table<WallFollowerOptions> WallFollowerKeys();
-options::Table<MissionOptions> MissionKeys();
-options::Table<ModelOptions> ModelKeys();
-options::Table<ExploreOptions> ExploreKeys();
-}  // namespace irslam::control
-
 namespace irslam::config {
 namespace {
 
@@ -208,12 +200,17 @@ void WalkConfig(robot::CoreOptions* o, Visitor* v) {
   v->End();
   v->Section("mission", "");
   v->Keys(&o->mission, control::MissionKeys());
+  v->Keys(&o->mission.loop, control::LoopKeys());
+  v->Keys(&o->mission.bump, control::BumpMemoryKeys());
   v->End();
   v->Section("model", "the room and furniture from the line map (paper section 5)");
   v->Keys(&o->model, control::ModelKeys());
   v->End();
   v->Section("exploration", "go to P1, contour following, surveys");
-  v->Keys(&o->explore, control::ExploreKeys());
+  v->Keys(&o->explore.go_to, control::GoToKeys());
+  v->Keys(&o->explore.go_to.planner, control::PlannerKeys());
+  v->Keys(&o->explore.contour, control::ContourKeys());
+  v->Keys(&o->explore.survey, control::SurveyKeys());
   v->End();
   WalkSlam(o, v);
 }

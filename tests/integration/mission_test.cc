@@ -182,7 +182,7 @@ TEST(FaultRunTest, ABoxTheWallFollowingLoopMissedIsFoundByALaterSurvey) {
   EXPECT_EQ(sc.complete, sc.pieces);
   // Only with the later surveys: without them the box is never seen.
   robot::CoreOptions one = robot::DefaultCoreOptions();
-  one.explore.max_surveys = 1;
+  one.explore.survey.max_surveys = 1;
   sim::InProcessRun once = sim::RunInProcess(world, one, 4, 900, nullptr, &*faults);
   EXPECT_EQ(metrics::ScoreObjects(ToJson(once.core->Map()), once.core->slam(), world).found, sc.pieces - 1);
 }

@@ -59,7 +59,7 @@ TEST_P(WallFollowRunTest, FollowsTheWholePerimeterWithoutTouchingAnything) {
   EXPECT_TRUE(cov.bottom && cov.right && cov.top && cov.left);
   // Back where following began (the perimeter of this room is ~17 m): the loop
   // closes within loop_close_radius_m of the estimated start.
-  EXPECT_LT(closest_return, o.mission.loop_close_radius_m + 0.05);
+  EXPECT_LT(closest_return, o.mission.loop.loop_close_radius_m + 0.05);
   EXPECT_GT(run.core->slam().distance_m(), 15.0);
 }
 

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include "control/path_planner.h"
+#include "control/room_geometry.h"
 #include "control/room_model.h"
 
 namespace irslam::control {
@@ -175,6 +176,26 @@ TEST(RoomModelTest, SidesInsideAFollowedContourAreOneObject) {
   EXPECT_TRUE(o.complete);
   EXPECT_NEAR(o.box.xmax, 2.5, 1e-9);
   EXPECT_NEAR(o.box.ymin, 2.2, 1e-9);
+}
+
+// The one corner rule (corner_m 0.35: loose 0.525, tight 0.1).
+TEST(RoomModelTest, TheCornerRule) {
+  using room_geometry::CornerEnd;
+  using room_geometry::MakeCorner;
+  // Both ends near the corner.
+  EXPECT_TRUE(MakeCorner(CornerEnd{0.2, false}, CornerEnd{0.3, false}, 0.35));
+  // One end near it, the other side runs past it.
+  EXPECT_TRUE(MakeCorner(CornerEnd{0.3, false}, CornerEnd{1.0, true}, 0.35));
+  // Both far: no corner.
+  EXPECT_FALSE(MakeCorner(CornerEnd{0.4, false}, CornerEnd{0.4, false}, 0.35));
+  // One ends right at it, the other was seen short of it by less than 1.5 corner_m ...
+  EXPECT_TRUE(MakeCorner(CornerEnd{0.05, false}, CornerEnd{0.5, false}, 0.35));
+  EXPECT_TRUE(MakeCorner(CornerEnd{0.5, false}, CornerEnd{0.05, false}, 0.35));
+  // ... but not by more.
+  EXPECT_FALSE(MakeCorner(CornerEnd{0.05, false}, CornerEnd{0.6, false}, 0.35));
+  EXPECT_FALSE(MakeCorner(CornerEnd{0.12, false}, CornerEnd{0.5, false}, 0.35));
+  // Within neither side's extent nor near an end of the other: no corner.
+  EXPECT_FALSE(MakeCorner(CornerEnd{0.3, false}, CornerEnd{0.6, false}, 0.35));
 }
 
 TEST(PathPlannerTest, LeavesATightSpotEvenFromWithinTheHardClearance) {

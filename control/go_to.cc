@@ -1,0 +1,266 @@
+#include "control/go_to.h"
+
+#include <algorithm>
+
+namespace irslam::control {
+
+options::Table<GoToOptions> GoToKeys() {
+  using O = GoToOptions;
+  static constexpr options::Key<O> kKeys[] = {
+      {"clearance_m", &O::clearance_m, 0, 1, "m",
+       "planned paths keep the robot radius plus this from mapped lines"},
+      {"goal_tolerance_m", &O::goal_tolerance_m, 0.01, 1, "m",
+       "a go-to goal is reached within this"},
+      {"heading_tolerance_rad", &O::heading_tolerance_rad, 0.01, 1, "rad",
+       "heading reached at P1 within this"},
+      {"cruise_speed_mps", &O::cruise_speed_mps, 0.01, 2, "m/s", "speed along a planned path"},
+      {"lookahead_m", &O::lookahead_m, 0.05, 2, "m",
+       "pure pursuit aims at the first path point this far"},
+      {"k_heading", &O::k_heading, 0.1, 20, "rad/s/rad", "turn rate per radian of heading error"},
+      {"replan_period_s", &O::replan_period_s, 0.1, 60, "s",
+       "the path is planned again this often"},
+      {"front_stop_m", &O::front_stop_m, 0.1, 2, "m",
+       "something this close ahead: stop and plan around it"},
+      {"go_to_timeout_s", &O::go_to_timeout_s, 1, 3600, "s",
+       "give a goal up if not reached by then"},
+      {"go_to_stuck_s", &O::go_to_stuck_s, 1, 3600, "s",
+       "... or after this long without getting further"},
+      {"go_to_progress_m", &O::go_to_progress_m, 0.01, 10, "m", "what counts as getting further"},
+      {"same_contact_m", &O::same_contact_m, 0, 2, "m",
+       "a contact this close to the last is the same one"},
+      {"same_contact_escapes", &O::same_contact_escapes, 1, 100, "",
+       "escapes from the same contact before it counts as a second one"},
+      {"near_obstacle_m", &O::near_obstacle_m, 0, 1, "m",
+       "a reading ahead within the robot radius plus this counts as in front"},
+      {"near_obstacle_offset_m", &O::near_obstacle_offset_m, 0, 1, "m",
+       "... at its distance plus this"},
+      {"look_around_factor", &O::look_around_factor, 0, 10, "",
+       "blocked with no path: turn at k_heading times this"},
+      {"align_max_rate_rad_s", &O::align_max_rate_rad_s, 0.05, 10, "rad/s",
+       "turn rate limit turning to P1's heading"},
+      {"pursuit_stop_angle_rad", &O::pursuit_stop_angle_rad, 0.05, 3.2, "rad",
+       "aim this far off the heading: turn on the spot"},
+      {"pursuit_max_rate_rad_s", &O::pursuit_max_rate_rad_s, 0.05, 10, "rad/s",
+       "turn rate limit along the path"},
+      {"approach_gain", &O::approach_gain, 0.01, 100, "1/s",
+       "near the goal the speed is at most gain times distance"},
+      {"approach_min_speed_mps", &O::approach_min_speed_mps, 0, 1, "m/s", "... plus this"},
+      {"line_extension_m", &O::line_extension_m, 0, 2, "m",
+       "mapped sides are planned around extended by this"},
+      {"hard_clearance_m", &O::hard_clearance_m, 0, 1, "m",
+       "never plan closer than the robot radius plus this"},
+      {"keep_path_ratio", &O::keep_path_ratio, 1, 10, "",
+       "keep the path being followed while at most this times the new one's length"},
+      {"keep_path_slack_m", &O::keep_path_slack_m, 0, 10, "m", "... plus this"},
+      {"keep_path_skip_m", &O::keep_path_skip_m, 0, 5, "m",
+       "... and clear of obstacles beyond this from the robot"},
+      {"escape_side_m", &O::escape_side_m, 0, 1, "m",
+       "after a contact, a mapped side within the robot radius plus this is what was hit"},
+      {"escape_max_s", &O::escape_max_s, 0.1, 60, "s",
+       "an escape from a contact lasts at most this"},
+      {"escape_heading_tolerance_rad", &O::escape_heading_tolerance_rad, 0.01, 3.2, "rad",
+       "turned away from a contact within this"},
+      {"escape_k_heading", &O::escape_k_heading, 0.1, 20, "rad/s/rad",
+       "turn rate per radian turning away"},
+      {"escape_max_rate_rad_s", &O::escape_max_rate_rad_s, 0.05, 10, "rad/s",
+       "turn rate limit turning away"},
+      {"escape_drive_s", &O::escape_drive_s, 0, 10, "s",
+       "drive off for this long once turned away"},
+      {"escape_speed_mps", &O::escape_speed_mps, 0, 1, "m/s", "speed driving off"},
+  };
+  return kKeys;
+}
+
+bool GoTo::TryGoal(const Eigen::Vector2d& goal, double heading, bool align, const slam::Slam& slam,
+                   const BumpMemory& bumps) {
+  p1_ = goal;
+  p1_heading_ = heading;
+  align_ = align;
+  return Replan(slam, RangeScan{}, bumps);
+}
+
+void GoTo::Begin(double t) {
+  // A contact the last behaviour ended in is this go-to's first.
+  since_ = t;
+  bumps_ = 0;
+  same_contact_escapes_ = 0;
+  last_plan_ = t;
+  arrived_ = false;
+}
+
+bool GoTo::Replan(const slam::Slam& slam, const RangeScan& scan, const BumpMemory& bumps) {
+  const auto& o = options_;
+  std::vector<Obstacle> obstacles;
+  // Mapped sides are seen shorter than they are (their ends are passed on
+  // corner arcs): plan around them extended at each end.
+  for (const auto& l : slam.lines()) {
+    const Eigen::Vector2d d = (l.p1 - l.p0).normalized();
+    obstacles.push_back({l.p0 - o.line_extension_m * d, l.p1 + o.line_extension_m * d});
+  }
+  for (const auto& b : bumps.points()) obstacles.push_back({b, b});
+  // What the IR sensors see now, mapped or not.
+  const Pose2 me = slam.pose();
+  for (int i = 0; i < kNumIrSensors; ++i) {
+    if (!scan.range_m[i]) continue;
+    const auto& m = mounts_[i];
+    const Eigen::Vector2d r(m.x + *scan.range_m[i] * std::cos(m.theta),
+                            m.y + *scan.range_m[i] * std::sin(m.theta));
+    const Eigen::Vector2d w = Eigen::Vector2d(me.x, me.y) + RotateVector(r, me.theta);
+    obstacles.push_back({w, w});
+  }
+  PlannerOptions po = o.planner;
+  po.inflation_m = radius_m_ + o.clearance_m;
+  po.hard_m = radius_m_ + o.hard_clearance_m;
+  auto path = PlanPath(obstacles, {me.x, me.y}, p1_, po);
+  if (!path) return false;
+  // Keep the path being followed while it is still clear and not much longer
+  // than the new one: near a tight spot two ways round are often about as long,
+  // and switching between them at every replan left the robot turning on the
+  // spot from one to the other.
+  if (!path_.empty() && (path_.back() - p1_).norm() < 1e-6) {
+    std::vector<Eigen::Vector2d> rest = path_;
+    rest.insert(rest.begin(), Eigen::Vector2d(me.x, me.y));
+    if (PathLength(rest) < o.keep_path_ratio * PathLength(*path) + o.keep_path_slack_m &&
+        PathClear(obstacles, rest, po.hard_m, o.keep_path_skip_m)) {
+      return true;
+    }
+  }
+  path_ = *path;
+  return true;
+}
+
+void GoTo::BeginEscape(double t, const slam::Slam& slam, double contact_bearing) {
+  // Away from the contact, then turn to face away from it and drive off. (A
+  // round robot can always turn on the spot; backing up would run into what is
+  // behind.) The contact is the nearest mapped side if one is that close, else
+  // its bearing from the bumper bits (left, right, both: ahead).
+  const Pose2 me = slam.pose();
+  const Eigen::Vector2d pos(me.x, me.y);
+  escape_heading_ = NormalizeAngle(me.theta + contact_bearing + M_PI);
+  double nearest = radius_m_ + options_.escape_side_m;
+  for (const auto& l : slam.lines()) {
+    const Eigen::Vector2d away = pos - ClosestPoint({l.p0, l.p1}, pos);
+    if (away.norm() < nearest && away.norm() > 1e-6) {
+      nearest = away.norm();
+      escape_heading_ = std::atan2(away.y(), away.x());
+    }
+  }
+  escape_turned_ = false;
+  backoff_until_ = t + options_.escape_max_s;  // at most; ends after the drive off
+  last_plan_ = -1e9;                           // replan around what was hit once clear
+}
+
+Twist GoTo::Escape(double t, const Pose2& me) {
+  const auto& o = options_;
+  if (!escape_turned_) {
+    const double err = NormalizeAngle(escape_heading_ - me.theta);
+    if (std::abs(err) > o.escape_heading_tolerance_rad) {
+      return {0, std::clamp(o.escape_k_heading * err, -o.escape_max_rate_rad_s,
+                            o.escape_max_rate_rad_s)};
+    }
+    escape_turned_ = true;
+    backoff_until_ = t + o.escape_drive_s;
+  }
+  return {o.escape_speed_mps, 0};
+}
+
+std::optional<double> GoTo::Front(const RangeScan& scan, const WallFollower& follower) const {
+  // Anything any sensor sees close ahead (not only the front ones: a box corner
+  // can sit between the beams of the front sensors), or what the bumper found
+  // there before (a chair leg the beams miss).
+  std::optional<double> front = follower.FrontDistance(scan);
+  for (int i = 0; i < kNumIrSensors; ++i) {
+    if (!scan.range_m[i]) continue;
+    const auto& m = mounts_[i];
+    const double hx = m.x + *scan.range_m[i] * std::cos(m.theta);
+    const double hy = m.y + *scan.range_m[i] * std::sin(m.theta);
+    if (hx > 0 && std::hypot(hx, hy) < radius_m_ + options_.near_obstacle_m) {
+      const double d = std::hypot(hx, hy) + options_.near_obstacle_offset_m;
+      if (!front || d < *front) front = d;
+    }
+  }
+  return front;
+}
+
+Twist GoTo::Pursue(const Pose2& me, std::optional<double> front) {
+  // Pure pursuit on the path: aim at the first path point beyond the lookahead.
+  const auto& o = options_;
+  const Eigen::Vector2d pos(me.x, me.y);
+  Eigen::Vector2d aim = path_.empty() ? p1_ : path_.back();
+  for (const auto& p : path_) {
+    if ((p - pos).norm() > o.lookahead_m) {
+      aim = p;
+      break;
+    }
+  }
+  // Drop the corners already passed.
+  while (path_.size() > 1 && (path_.front() - pos).norm() < o.lookahead_m)
+    path_.erase(path_.begin());
+  const double err = NormalizeAngle(std::atan2(aim.y() - pos.y(), aim.x() - pos.x()) - me.theta);
+  double v = o.cruise_speed_mps * std::max(0.0, std::cos(err));
+  if (std::abs(err) > o.pursuit_stop_angle_rad) v = 0;
+  v = std::min(v, o.approach_gain * (pos - p1_).norm() + o.approach_min_speed_mps);
+  if (front && *front < o.front_stop_m) v = 0;
+  return {v, std::clamp(o.k_heading * err, -o.pursuit_max_rate_rad_s, o.pursuit_max_rate_rad_s)};
+}
+
+GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_scan,
+                        uint8_t bumpers, const BumpMemory& bumps, const WallFollower& follower) {
+  const auto& o = options_;
+  if (t - since_ > o.go_to_timeout_s) return GiveUp("not reached in time");
+  // Stuck (turning on the spot, no way found through what the beams see): after
+  // go_to_stuck_s without getting go_to_progress_m further, give the goal up.
+  {
+    const Pose2 p = slam.pose();
+    if (progress_t_ < since_ ||
+        std::hypot(p.x - progress_at_.x(), p.y - progress_at_.y()) > o.go_to_progress_m) {
+      progress_t_ = t;
+      progress_at_ = {p.x, p.y};
+    } else if (t - progress_t_ > o.go_to_stuck_s && t >= backoff_until_) {
+      return GiveUp("no way found");
+    }
+  }
+  if (bumpers != 0 && t >= backoff_until_) {
+    // The same contact again (not got clear of it yet) is not a second one.
+    const Pose2 p = slam.pose();
+    const bool same =
+        bumps_ >= 1 &&
+        std::hypot(p.x - last_contact_.x(), p.y - last_contact_.y()) < o.same_contact_m &&
+        ++same_contact_escapes_ < o.same_contact_escapes;
+    if (!same) same_contact_escapes_ = 0;
+    last_contact_ = {p.x, p.y};
+    if (bumps_ >= 1 && !same) {
+      // A second contact on the way: the way there is blocked by things the
+      // beams miss (chair legs). Do not push on through them: give the goal up
+      // (the next behaviour gets clear of the contact first).
+      return GiveUp("the way is blocked by obstacles the sensors miss");
+    }
+    if (!same) ++bumps_;
+    BeginEscape(t, slam, bumps.ContactBearing(bumpers));
+  }
+  if (t < backoff_until_) return Drive(Escape(t, slam.pose()));
+  const Pose2 me = slam.pose();
+  const Eigen::Vector2d pos(me.x, me.y);
+  // Something close ahead stops the robot and makes it plan around it.
+  const RangeScan scan = bumps.Apply(raw_scan, me);
+  const std::optional<double> front = Front(scan, follower);
+  if ((front && *front < o.front_stop_m) || t - last_plan_ > o.replan_period_s) {
+    last_plan_ = t;
+    if (!Replan(slam, scan, bumps) && front && *front < o.front_stop_m) {
+      return Drive({0, o.k_heading * o.look_around_factor});  // blocked: look around
+    }
+  }
+  if (arrived_ || (pos - p1_).norm() < o.goal_tolerance_m) {
+    if (!align_) {
+      arrived_ = true;
+      return {Status::kArrived, {}, {}};
+    }
+    const double err = NormalizeAngle(p1_heading_ - me.theta);
+    if (std::abs(err) < o.heading_tolerance_rad) return {Status::kArrived, {}, {}};
+    return Drive(
+        {0, std::clamp(o.k_heading * err, -o.align_max_rate_rad_s, o.align_max_rate_rad_s)});
+  }
+  return Drive(Pursue(me, front));
+}
+
+}  // namespace irslam::control

@@ -1,0 +1,130 @@
+// Going to a goal (P1 beside an object, or a survey point): A* path planning
+// around the mapped lines, remembered bump points and what the beams see now,
+// pure pursuit along the path with periodic replanning, escape from contacts
+// (turn away from what was hit, drive off), and giving the goal up (timeout,
+// stuck, a second contact). For a goal with a heading the robot turns to it on
+// arrival. Pure: time, map and readings are arguments.
+#ifndef IRSLAM_CONTROL_GO_TO_H_
+#define IRSLAM_CONTROL_GO_TO_H_
+
+#include <Eigen/Core>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "control/bump_memory.h"
+#include "control/path_planner.h"
+#include "control/wall_follower.h"
+#include "slam/slam.h"
+#include "types/options.h"
+
+namespace irslam::control {
+
+struct GoToOptions {
+  // [exploration] keys since the first exploration release.
+  double clearance_m = 0.08;       // planned paths keep robot radius + this from mapped lines
+  double goal_tolerance_m = 0.08;  // the goal is reached within this
+  double heading_tolerance_rad = 0.12;
+  double cruise_speed_mps = 0.18;
+  double lookahead_m = 0.25;
+  double k_heading = 2.5;  // rad/s per radian of heading error
+  double replan_period_s = 2.0;
+  double front_stop_m = 0.32;   // unmapped obstacle ahead: stop, replan
+  double go_to_timeout_s = 90;  // give the goal up if not reached by then
+  double go_to_stuck_s = 25;    // ... or if the robot got no go_to_progress_m further for this long
+  // Tuning numbers that used to be literals.
+  double go_to_progress_m = 0.3;  // what counts as getting further (stuck detection)
+  double same_contact_m = 0.15;   // a contact this close to the last one is the same contact
+  int same_contact_escapes = 5;   // ... for at most this many escapes
+  double near_obstacle_m = 0.12;  // a reading ahead within robot radius + this stops the robot
+  double near_obstacle_offset_m = 0.1;  // ... and counts as this much farther than it is
+  double look_around_factor = 0.3;      // blocked: turn at k_heading times this (rad/s)
+  double align_max_rate_rad_s = 0.8;    // turning to the goal's heading
+  double pursuit_stop_angle_rad = 0.8;  // aim this far off the heading: turn on the spot
+  double pursuit_max_rate_rad_s = 1.0;
+  double approach_gain =
+      0.6;  // speed limit near the goal: gain * distance + approach_min_speed_mps
+  double approach_min_speed_mps = 0.03;
+  double line_extension_m = 0.15;  // mapped sides are planned around extended this much at each end
+  double hard_clearance_m = 0.02;  // never plan closer than robot radius + this
+  double keep_path_ratio = 1.25;   // keep the current path while shorter than ratio * new + slack
+  double keep_path_slack_m = 0.2;
+  double keep_path_skip_m = 0.3;  // ... and clear beyond this from the robot
+  double escape_side_m = 0.08;    // a mapped side within robot radius + this is what was hit
+  double escape_max_s = 6.0;      // an escape lasts at most this
+  double escape_heading_tolerance_rad = 0.25;
+  double escape_k_heading = 2.0;  // rad/s per radian while turning away
+  double escape_max_rate_rad_s = 0.9;
+  double escape_drive_s = 1.0;  // drive off for this long once turned away
+  double escape_speed_mps = 0.08;
+  PlannerOptions planner;  // grid; inflation and hard distance come from the above
+};
+options::Table<GoToOptions> GoToKeys();
+
+// Rotation of a vector by angle a (frames differ by the map rotation).
+inline Eigen::Vector2d RotateVector(const Eigen::Vector2d& v, double a) {
+  return {std::cos(a) * v.x() - std::sin(a) * v.y(), std::sin(a) * v.x() + std::cos(a) * v.y()};
+}
+
+class GoTo {
+ public:
+  enum class Status { kDriving, kArrived, kGiveUp };
+  struct Result {
+    Status status = Status::kDriving;
+    Twist twist;      // kDriving
+    std::string why;  // kGiveUp
+  };
+
+  GoTo(GoToOptions options, const RobotGeometry& geometry,
+       const std::array<SensorMount, kNumIrSensors>& mounts)
+      : options_(options), radius_m_(geometry.radius_m), mounts_(mounts) {}
+
+  // Sets the goal (internal frame) and plans a path to it from the robot's pose;
+  // false if none was found. align: on arrival turn to `heading` first; without,
+  // once reached the goal stays reached (the caller acts there).
+  bool TryGoal(const Eigen::Vector2d& goal, double heading, bool align, const slam::Slam& slam,
+               const BumpMemory& bumps);
+  // Starts driving to the goal set by the last successful TryGoal.
+  void Begin(double t);
+  // One control step; bumpers: the bumper bits now.
+  Result Step(double t, const slam::Slam& slam, const RangeScan& raw_scan, uint8_t bumpers,
+              const BumpMemory& bumps, const WallFollower& follower);
+
+  const Eigen::Vector2d& goal() const { return p1_; }
+  const std::vector<Eigen::Vector2d>& path() const { return path_; }
+
+ private:
+  Result GiveUp(std::string why) { return {Status::kGiveUp, {}, std::move(why)}; }
+  Result Drive(Twist tw) { return {Status::kDriving, tw, {}}; }
+  bool Replan(const slam::Slam& slam, const RangeScan& scan, const BumpMemory& bumps);
+  // The nearest thing ahead (mapped or not, or a bump point) from the scan.
+  std::optional<double> Front(const RangeScan& scan, const WallFollower& follower) const;
+  void BeginEscape(double t, const slam::Slam& slam, double contact_bearing);
+  Twist Escape(double t, const Pose2& me);
+  Twist Pursue(const Pose2& me, std::optional<double> front);
+
+  GoToOptions options_;
+  double radius_m_;
+  std::array<SensorMount, kNumIrSensors> mounts_;
+  Eigen::Vector2d p1_ = Eigen::Vector2d::Zero();  // internal frame
+  double p1_heading_ = 0;
+  bool align_ = true;
+  bool arrived_ = false;
+  std::vector<Eigen::Vector2d> path_;
+  double since_ = 0;
+  double last_plan_ = -1e9;
+  double backoff_until_ = -1e9;
+  double escape_heading_ = 0;
+  bool escape_turned_ = false;
+  int bumps_ = 0;  // contacts since the go-to began
+  int same_contact_escapes_ = 0;
+  Eigen::Vector2d last_contact_ = Eigen::Vector2d::Zero();
+  double progress_t_ = -1;  // got go_to_progress_m further at this time ...
+  Eigen::Vector2d progress_at_ = Eigen::Vector2d::Zero();  // ... from here
+};
+
+}  // namespace irslam::control
+
+#endif  // IRSLAM_CONTROL_GO_TO_H_

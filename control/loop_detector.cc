@@ -1,0 +1,58 @@
+#include "control/loop_detector.h"
+
+#include <cmath>
+
+namespace irslam::control {
+
+options::Table<LoopOptions> LoopKeys() {
+  using O = LoopOptions;
+  static constexpr options::Key<O> kKeys[] = {
+      {"loop_min_distance_m", &O::loop_min_distance_m, 0.1, 1000, "m",
+       "wall following must cover this before a loop can close"},
+      {"loop_close_radius_m", &O::loop_close_radius_m, 0.01, 10, "m",
+       "the loop closes back within this of where steady following began"},
+      {"loop_close_angle_rad", &O::loop_close_angle_rad, 0.01, 3.2, "rad",
+       "... and within this of its heading"},
+      {"loop_anchor_steady_s", &O::loop_anchor_steady_s, 0, 60, "s",
+       "the loop's start is taken after this long of steady following"},
+      {"loop_free_object_turn_rad", &O::loop_free_object_turn_rad, 0, 6.3, "rad",
+       "a loop that turned more than this clockwise went round a free object"},
+  };
+  return kKeys;
+}
+
+LoopEvent LoopDetector::Update(double t, bool steady, const Pose2& pose, double distance_m) {
+  if (!steady) {
+    follow_since_ = -1;
+  } else if (follow_since_ < 0) {
+    follow_since_ = t;
+  }
+  if (follow_since_ >= 0 && t - follow_since_ >= options_.loop_anchor_steady_s && !have_anchor_) {
+    have_anchor_ = true;
+    anchor_ = pose;
+    last_pose_ = anchor_;
+    turned_since_anchor_ = 0;
+    anchor_distance_ = distance_m;
+  }
+  if (!have_anchor_) return LoopEvent::kNone;
+  turned_since_anchor_ += NormalizeAngle(pose.theta - last_pose_.theta);
+  last_pose_ = pose;
+  if (distance_m - anchor_distance_ <= options_.loop_min_distance_m) return LoopEvent::kNone;
+  const double d = std::hypot(pose.x - anchor_.x, pose.y - anchor_.y);
+  const double a = std::abs(NormalizeAngle(pose.theta - anchor_.theta));
+  if (d >= options_.loop_close_radius_m || a >= options_.loop_close_angle_rad)
+    return LoopEvent::kNone;
+  if (turned_since_anchor_ < -options_.loop_free_object_turn_rad) {
+    have_anchor_ = false;
+    return LoopEvent::kFreeObject;
+  }
+  return LoopEvent::kRoom;
+}
+
+void LoopDetector::Rearm(const Pose2& pose, double distance_m) {
+  anchor_ = pose;
+  anchor_distance_ = distance_m;
+  turned_since_anchor_ = 0;
+}
+
+}  // namespace irslam::control

@@ -1,0 +1,84 @@
+// ContourFollow: which object next, where following it starts, when it ends.
+#include "control/contour_follow.h"
+
+#include <gtest/gtest.h>
+
+#include "robot/robot_core.h"
+
+namespace irslam::control {
+namespace {
+
+slam::LineFeature Line(int id, Eigen::Vector2d p0, Eigen::Vector2d p1) {
+  slam::LineFeature l;
+  l.id = id;
+  l.p0 = p0;
+  l.p1 = p1;
+  const Eigen::Vector2d d = (p1 - p0).normalized();
+  l.theta = std::atan2(-d.x(), d.y());  // a normal of the line
+  l.rho = l.p0.dot(Eigen::Vector2d(std::cos(l.theta), std::sin(l.theta)));
+  return l;
+}
+
+TEST(ContourFollowTest, NearestPendingObject) {
+  EnvironmentModel m;
+  ObjectModel a, b, c;
+  a.id = 1;
+  a.box = {0, 0, 1, 1};  // centre (0.5, 0.5)
+  b.id = 2;
+  b.box = {2, 2, 3, 3};
+  c.id = 3;
+  c.box = {0, 0, 0.2, 0.2};
+  c.complete = true;  // nearest, but complete
+  m.objects = {a, b, c};
+  EXPECT_EQ(NearestPending(m, {0, 0, 0})->id, 1);
+  EXPECT_EQ(NearestPending(m, {3, 3, 0})->id, 2);
+  m.objects[0].given_up = true;
+  EXPECT_EQ(NearestPending(m, {0, 0, 0})->id, 2);
+  m.objects[1].complete = true;
+  EXPECT_EQ(NearestPending(m, {0, 0, 0}), nullptr);
+}
+
+TEST(ContourFollowTest, StartsOnTheSeenSideHeadingWithTheObjectOnTheRight) {
+  ObjectModel box;
+  box.lines = {7, 8};
+  // Bottom side y = 1 seen from below; left side x = 1 seen from the left.
+  const std::vector<slam::LineFeature> lines = {Line(7, {1, 1}, {2, 1}), Line(8, {1, 1}, {1, 2}),
+                                                Line(9, {5, 5}, {6, 5})};
+  const std::vector<TimedPose> traj = {{0, {1.5, 0.5, 0}}, {1, {0.5, 1.5, 0}}};
+  const auto starts = ContourStarts(box, lines, traj, {1.5, 0, 0}, 0.4);
+  ASSERT_EQ(starts.size(), 2u);  // line 9 is another object's
+  // The bottom side is nearer the robot: start 0.4 m below its middle, heading -x.
+  EXPECT_NEAR(starts[0].p.x(), 1.5, 1e-12);
+  EXPECT_NEAR(starts[0].p.y(), 0.6, 1e-12);
+  EXPECT_NEAR(std::abs(starts[0].heading), M_PI, 1e-12);
+  // Then the left side: 0.4 m left of its middle, heading +y.
+  EXPECT_NEAR(starts[1].p.x(), 0.6, 1e-12);
+  EXPECT_NEAR(starts[1].p.y(), 1.5, 1e-12);
+  EXPECT_NEAR(starts[1].heading, M_PI / 2, 1e-12);
+}
+
+TEST(ContourFollowTest, TimesOut) {
+  const robot::CoreOptions o = robot::DefaultCoreOptions();
+  slam::Slam slam(o.slam);
+  WallFollower follower(o.wall, o.slam.mounts, o.slam.geometry.radius_m);
+  Modeler modeler(o.model);
+  ContourOptions co;
+  co.contour_timeout_s = 20;
+  ContourFollow c(co, o.wall.follow_distance_m);
+  c.SetTarget(1, true);  // at a wall, but not in the model: never "left"
+  c.Start(10, 0, 0);
+  double ended = -1;
+  for (double t = 10; t < 100 && ended < 0; t += 0.5) {
+    const auto r = c.Step(t, slam, RangeScan{}, false, &follower, &modeler);
+    if (r.status != ContourFollow::Status::kFollowing) {
+      EXPECT_EQ(r.status, ContourFollow::Status::kTimedOut);
+      ended = t;
+    } else {
+      EXPECT_GT(r.twist.v, 0);  // the follower looks for the side
+    }
+  }
+  EXPECT_DOUBLE_EQ(ended, 30.5);
+}
+
+}  // namespace
+}  // namespace irslam::control
