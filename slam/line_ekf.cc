@@ -109,7 +109,66 @@ void LineEkf::RemoveLine(int i) {
   P_ = std::move(p);
 }
 
+void LineEkf::FindColumns(const Eigen::MatrixXd& h) {
+  cols_.clear();
+  for (long j = 0; j < h.cols(); ++j) {
+    if ((h.col(j).array() != 0).any()) cols_.push_back(static_cast<int>(j));
+  }
+  hc_.resize(h.rows(), static_cast<long>(cols_.size()));
+  for (size_t j = 0; j < cols_.size(); ++j) hc_.col(static_cast<long>(j)) = h.col(cols_[j]);
+}
+
 void LineEkf::Update(const Eigen::VectorXd& y, const Eigen::MatrixXd& h, const Eigen::MatrixXd& r) {
+  FindColumns(h);
+  UpdateColumns(y, cols_, hc_, r);
+}
+
+Eigen::MatrixXd LineEkf::ProjectedCov(const Eigen::MatrixXd& h) const {
+  std::vector<long> cols;
+  for (long j = 0; j < h.cols(); ++j) {
+    if ((h.col(j).array() != 0).any()) cols.push_back(j);
+  }
+  const long c = static_cast<long>(cols.size());
+  Eigen::MatrixXd hc(h.rows(), c), pc(c, c);
+  for (long a = 0; a < c; ++a) {
+    hc.col(a) = h.col(cols[static_cast<size_t>(a)]);
+    for (long b = 0; b < c; ++b) pc(a, b) = P_(cols[static_cast<size_t>(a)], cols[static_cast<size_t>(b)]);
+  }
+  return hc * pc * hc.transpose();
+}
+
+void LineEkf::UpdateColumns(const Eigen::VectorXd& y, const std::vector<int>& cols, const Eigen::MatrixXd& hc,
+                            const Eigen::MatrixXd& r) {
+  const long n = x_.size(), m = y.size();
+  // P H' (n x m) from H's non-zero columns only: sum over them of P(:, j) H(:, j)'.
+  pht_.setZero(n, m);
+  for (size_t j = 0; j < cols.size(); ++j) {
+    pht_.noalias() += P_.col(cols[j]) * hc.col(static_cast<long>(j)).transpose();
+  }
+  // S = H P H' + R (m x m): H times the rows of P H' at H's columns.
+  Eigen::MatrixXd s = r;
+  for (size_t j = 0; j < cols.size(); ++j) s.noalias() += hc.col(static_cast<long>(j)) * pht_.row(cols[j]);
+  // ku_ = [K U], uk_ = [U K] with the gain K = P H' S^-1 and U = P H' - K S / 2.
+  ku_.resize(n, 2 * m);
+  uk_.resize(n, 2 * m);
+  auto k = ku_.leftCols(m);
+  auto u = ku_.rightCols(m);
+  k.noalias() = pht_ * s.inverse();
+  x_.noalias() += k * y;
+  x_(2) = NormalizeAngle(x_(2));
+  u = pht_;
+  u.noalias() -= 0.5 * k * s;
+  uk_.leftCols(m) = u;
+  uk_.rightCols(m) = k;
+  // Joseph form, exactly: (I-KH) P (I-KH)' + K R K' = P - K H P - P H' K' + K S K'
+  //                                                 = P - (K U' + U K').
+  // A symmetric rank-2m update of P's lower triangle in place, mirrored to the upper.
+  P_.triangularView<Eigen::Lower>() -= ku_ * uk_.transpose();
+  P_.triangularView<Eigen::StrictlyUpper>() = P_.transpose();
+  NormalizeAllLines();
+}
+
+void LineEkf::UpdateReference(const Eigen::VectorXd& y, const Eigen::MatrixXd& h, const Eigen::MatrixXd& r) {
   const Eigen::MatrixXd pht = P_ * h.transpose();           // n x m
   const Eigen::MatrixXd s = h * pht + r;                     // m x m
   const Eigen::MatrixXd k = pht * s.inverse();               // n x m
@@ -119,6 +178,10 @@ void LineEkf::Update(const Eigen::VectorXd& y, const Eigen::MatrixXd& h, const E
   const Eigen::MatrixXd a = P_ - k * pht.transpose();
   P_ = a - (a * h.transpose()) * k.transpose() + k * r * k.transpose();
   P_ = 0.5 * (P_ + P_.transpose()).eval();
+  NormalizeAllLines();
+}
+
+void LineEkf::NormalizeAllLines() {
   for (int i = 0; i < num_lines(); ++i) NormalizeLineState(i);
 }
 
