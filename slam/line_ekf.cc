@@ -1,6 +1,7 @@
 #include "slam/line_ekf.h"
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 
 #include "slam/line_extraction.h"
@@ -162,9 +163,19 @@ void LineEkf::UpdateColumns(const Eigen::VectorXd& y, const std::vector<int>& co
   uk_.rightCols(m) = k;
   // Joseph form, exactly: (I-KH) P (I-KH)' + K R K' = P - K H P - P H' K' + K S K'
   //                                                 = P - (K U' + U K').
-  // A symmetric rank-2m update of P's lower triangle in place, mirrored to the upper.
-  P_.triangularView<Eigen::Lower>() -= ku_ * uk_.transpose();
-  P_.triangularView<Eigen::StrictlyUpper>() = P_.transpose();
+  // A symmetric rank-2m update of P in place: the lower triangle is computed one
+  // panel of kPanel columns at a time, and each panel is mirrored into the upper
+  // triangle right after (a final mirror of the whole lower triangle reads P across
+  // its rows, a TLB page per element, and costs more than the update at 1,000
+  // lines). No n x n temporary; P stays exactly symmetric.
+  constexpr long kPanel = 64;
+  for (long jb = 0; jb < n; jb += kPanel) {
+    const long b = std::min(kPanel, n - jb), rest = n - jb - b;
+    P_.block(jb, jb, n - jb, b).noalias() -= ku_.bottomRows(n - jb) * uk_.middleRows(jb, b).transpose();
+    auto diagonal = P_.block(jb, jb, b, b);
+    diagonal.triangularView<Eigen::StrictlyUpper>() = diagonal.transpose();
+    if (rest > 0) P_.block(jb, jb + b, b, rest) = P_.block(jb + b, jb, rest, b).transpose();
+  }
   NormalizeAllLines();
 }
 
