@@ -1,6 +1,6 @@
 // The one configuration file of irslamd (and of `irslam-sim run`): JSON with
-// // comments, every key optional with a documented default (docs/config.md,
-// config/irslamd.conf), unknown keys rejected with their full name.
+// // comments, every key optional with a documented default (daemon/irslamd.conf,
+// generated from the option tables), unknown keys rejected with their full name.
 #ifndef IRSLAM_DAEMON_CONFIG_H_
 #define IRSLAM_DAEMON_CONFIG_H_
 
@@ -18,6 +18,9 @@ bool ParseConfig(std::string_view text, robot::CoreOptions* options, std::string
 bool LoadConfigFile(const std::string& path, robot::CoreOptions* options, std::string* error);
 // The effective configuration as JSON (what `irslamd --print-config` shows).
 std::string DumpConfig(const robot::CoreOptions& options);
+// The commented config file for these options: every key with what it does, its
+// unit and bounds (daemon/irslamd.conf is this for the defaults; a test checks it).
+std::string DocumentedConfig(const robot::CoreOptions& options);
 
 }  // namespace irslam
 

@@ -24,6 +24,9 @@ int main(int argc, char** argv) {
   int max_clients = 0;
   app.add_option("--max-clients", max_clients, "API client limit (overrides api.max_clients)");
   app.add_flag("--print-config", print_config, "Print the effective configuration and exit");
+  bool print_default_config = false;
+  app.add_flag("--print-default-config", print_default_config,
+               "Print the commented default config file (daemon/irslamd.conf) and exit");
   app.add_option("--test-hang-at", options.test_hang_at_s,
                  "Test aid: hang the control loop at this robot time (watchdog tests)")
       ->group("Testing");
@@ -43,6 +46,10 @@ int main(int argc, char** argv) {
   options.limits.max_line_bytes = static_cast<size_t>(core.api.max_line_bytes);
   options.limits.idle_timeout_s = core.api.idle_timeout_s;
   options.limits.max_pending_bytes = static_cast<size_t>(core.api.max_pending_bytes);
+  if (print_default_config) {
+    std::printf("%s", irslam::DocumentedConfig(irslam::robot::DefaultCoreOptions()).c_str());
+    return 0;
+  }
   if (print_config) {
     std::printf("%s\n", irslam::DumpConfig(core).c_str());
     return 0;

@@ -79,4 +79,20 @@ std::optional<double> IrCalibration::CountsToRange(uint16_t counts) const {
   return d;
 }
 
+options::Table<IrCalibrationOptions> IrCalibrationKeys() {
+  using I = IrCalibrationOptions;
+  static constexpr options::Key<I> kKeys[] = {
+      {"adc_vref_v", &I::adc_vref_v, 0.1, 24, "V", "ADC reference voltage"},
+      {"adc_bits", &I::adc_bits, 8, 16, "", "ADC resolution"},
+      {"min_range_m", &I::min_range_m, 0.0, 10.0, "m", "readings outside [min, max] are no reading"},
+      {"max_range_m", &I::max_range_m, 0.0, 10.0, "m", "(see min_range_m)"},
+      {"plausible_min_v", &I::plausible_min_v, 0.0, 10.0, "V",
+       "an output outside [min, max] volts is a sensor fault: dropped, counted (frames.ir_out_of_range)"},
+      {"plausible_max_v", &I::plausible_max_v, 0.0, 10.0, "V", "(see plausible_min_v)"},
+      {"stuck_samples", &I::stuck_samples, 0, 100000, "",
+       "the same raw value this many samples in a row: stuck, dropped until it changes (0 = off)"},
+  };
+  return kKeys;
+}
+
 }  // namespace irslam::drivers

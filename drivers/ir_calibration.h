@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include "types/options.h"
+
 namespace irslam::drivers {
 
 struct IrCalibrationOptions {
@@ -32,6 +34,9 @@ struct IrCalibrationOptions {
   // Empty when valid, else a one-line description of the problem.
   std::string Validate() const;
 };
+
+// Config section [sensors] (with the mounts, and the table read by the loader).
+options::Table<IrCalibrationOptions> IrCalibrationKeys();
 
 class IrCalibration {
  public:
@@ -56,3 +61,4 @@ class IrCalibration {
 }  // namespace irslam::drivers
 
 #endif  // IRSLAM_DRIVERS_IR_CALIBRATION_H_
+

@@ -234,4 +234,14 @@ const char* MotorClient::LossReason(double now_s) const {
 
 bool MotorClient::ControllerAlive(double now_s) const { return *LossReason(now_s) == '\0'; }
 
+options::Table<MotorClientOptions> MotorClientKeys() {
+  using M = MotorClientOptions;
+  static constexpr options::Key<M> kKeys[] = {
+      {"timeout_s", &M::timeout_s, 0.005, 10, "s", "encoder silence beyond this (robot time): fault"},
+      {"plausible_speed_factor", &M::plausible_speed_factor, 0, 100, "",
+       "count jumps faster than this x max_wheel_speed_mps are dropped (0 = off)"},
+  };
+  return kKeys;
+}
+
 }  // namespace irslam::drivers

@@ -13,6 +13,7 @@
 
 #include "proto/codec.h"
 #include "types/geometry.h"
+#include "types/options.h"
 #include "types/signals.h"
 
 namespace irslam::drivers {
@@ -90,6 +91,9 @@ struct MotorClientOptions {
   double max_counts_per_s = 0;
   double plausible_speed_factor = 2.0;
 };
+
+// Config section [controller] (with the core's heartbeat_period_s).
+options::Table<MotorClientOptions> MotorClientKeys();
 
 class MotorClient {
  public:

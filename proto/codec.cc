@@ -8,7 +8,7 @@
 namespace irslam::proto {
 namespace {
 
-// These tables mirror proto/irslam.dbc (checked by tests/proto_dbc_test.cc).
+// These tables mirror proto/irslam.dbc (checked by tests/unit/proto_dbc_test.cc).
 constexpr SignalSpec kWheelCmdSignals[] = {
     {"LeftVelocity", 0, 16, true, true, 0.001, 0},
     {"RightVelocity", 16, 16, true, true, 0.001, 0},

@@ -1,7 +1,7 @@
 // CAN message definitions and their pure encode/decode functions.
 //
 // proto/irslam.dbc is the single definition of the bus; the tables in codec.cc
-// mirror it signal by signal, and tests/proto_dbc_test.cc parses the DBC and
+// mirror it signal by signal, and tests/unit/proto_dbc_test.cc parses the DBC and
 // checks every signal against these tables so the two cannot drift apart.
 #ifndef IRSLAM_PROTO_CODEC_H_
 #define IRSLAM_PROTO_CODEC_H_

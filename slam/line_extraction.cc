@@ -311,4 +311,26 @@ std::vector<ExtractedLine> ExtractLines(const Points& pds, const Eigen::Vector2d
   return out;
 }
 
+options::Table<ExtractionOptions> ExtractionKeys() {
+  using X = ExtractionOptions;
+  static constexpr options::Key<X> kKeys[] = {
+      {"gravity_radius_m", &X::gravity_radius_m, 0, 1, "m", "resampling: neighbours closer than this ..."},
+      {"gravity_max_points", &X::gravity_max_points, 1, 100, "", "... and at most this many are averaged"},
+      {"cluster_gap_m", &X::cluster_gap_m, 0.005, 2, "m", "D: split where consecutive points are farther apart"},
+      {"min_points", &X::min_points, 2, 10000, "", "N: fewest points of a line"},
+      {"min_length_m", &X::min_length_m, 0.01, 10, "m", "L: shortest line"},
+      {"split_threshold_m", &X::split_threshold_m, 0.001, 1, "m", "T (IEPF split and merge)"},
+      {"max_fit_rms_m", &X::max_fit_rms_m, 0.0001, 1, "m", "delta: orthogonal fit residual (RMS)"},
+      {"hough_rho_window_m", &X::hough_rho_window_m, 0.001, 1, "m", "constrained Hough: +- this in rho ..."},
+      {"hough_rho_res_m", &X::hough_rho_res_m, 0.0001, 0.5, "m", "... at this resolution"},
+      {"hough_theta_window_rad", &X::hough_theta_window_rad, 0.001, 1, "rad", "+- this in theta ..."},
+      {"hough_theta_res_rad", &X::hough_theta_res_rad, 0.0001, 0.5, "rad", "... at this resolution"},
+      {"weight_length", &X::weight_length, 0, 1e6, "m", "eq. (8) weight wl (irslam-weights computes them)"},
+      {"weight_rho", &X::weight_rho, 0, 1e9, "1/m^2", "eq. (8) weight wrho"},
+      {"weight_theta", &X::weight_theta, 0, 1e9, "1/rad^2", "eq. (8) weight wtheta"},
+      {"max_uncertainty", &X::max_uncertainty, 0, 1e9, "", "lines with U (eq. 8) above this are dropped"},
+  };
+  return kKeys;
+}
+
 }  // namespace irslam::slam

@@ -13,6 +13,8 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "types/options.h"
+
 namespace irslam::slam {
 
 using Points = std::vector<Eigen::Vector2d>;
@@ -36,6 +38,9 @@ struct ExtractionOptions {
   double weight_theta = 791;        // wtheta [1/rad^2]
   double max_uncertainty = 4.5;     // lines with U above this are dropped
 };
+
+// Config section [slam.extraction].
+options::Table<ExtractionOptions> ExtractionKeys();
 
 struct LineFit {
   double rho = 0, theta = 0;
@@ -99,3 +104,4 @@ std::vector<ExtractedLine> ExtractLines(const Points& pds, const Eigen::Vector2d
 }  // namespace irslam::slam
 
 #endif  // IRSLAM_SLAM_LINE_EXTRACTION_H_
+

@@ -49,4 +49,14 @@ Eigen::Matrix3d Odometry::ProcessNoise(const Pose2& p, const Motion& m, const Mo
   return g * q * g.transpose();
 }
 
+options::Table<MotionNoise> MotionNoiseKeys() {
+  using N = MotionNoise;
+  static constexpr options::Key<N> kKeys[] = {
+      {"var_per_m", &N::var_per_m, 0, 1, "m^2/m", "odometry position variance per metre travelled"},
+      {"var_theta_per_rad", &N::var_theta_per_rad, 0, 1, "rad^2/rad", "heading variance per radian turned"},
+      {"var_theta_per_m", &N::var_theta_per_m, 0, 1, "rad^2/m", "heading variance per metre travelled"},
+  };
+  return kKeys;
+}
+
 }  // namespace irslam::slam

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "types/geometry.h"
+#include "types/options.h"
 #include "types/robot.h"
 #include "types/signals.h"
 
@@ -24,6 +25,9 @@ struct Motion {
   double ds = 0;      // distance travelled by the centre
   double dtheta = 0;  // rotation
 };
+
+// Config section [slam] (odometry noise keys).
+options::Table<MotionNoise> MotionNoiseKeys();
 
 class Odometry {
  public:

@@ -424,4 +424,46 @@ void Slam::MergeOverlapping() {
   }
 }
 
+options::Table<SlamOptions> SlamKeys() {
+  static constexpr options::Key<SlamOptions> kKeys[] = {
+      {"trajectory_period_s", &SlamOptions::trajectory_period_s, 0.01, 0.5, "s", "map trajectory sampling"},
+  };
+  return kKeys;
+}
+
+options::Table<PdsOptions> PdsKeys() {
+  using P = PdsOptions;
+  static constexpr options::Key<P> kKeys[] = {
+      {"min_step_m", &P::min_step_m, 0, 1, "m", "a scan joins the pseudo dense scan after this much motion ..."},
+      {"min_turn_rad", &P::min_turn_rad, 0, 1, "rad", "... or this much rotation"},
+      {"window_m", &P::window_m, 0.05, 10, "m", "the window closes after this distance ..."},
+      {"window_rad", &P::window_rad, 0.05, 10, "rad", "... or this rotation"},
+      {"max_range_m", &P::max_range_m, 0.1, 10, "m", "readings beyond this are not used for mapping"},
+  };
+  return kKeys;
+}
+
+options::Table<AssociationOptions> AssociationKeys() {
+  using A = AssociationOptions;
+  static constexpr options::Key<A> kKeys[] = {
+      {"weight_rho", &A::weight_rho, 0, 1, "", "DH weight of rho, eq. (13); weight_rho + weight_theta = 1"},
+      {"weight_theta", &A::weight_theta, 0, 1, "", "DH weight of theta, eq. (13)"},
+      {"max_dh", &A::max_dh, 0, 10, "", "epsilon_DH: the largest weighted Hough distance of a match"},
+      {"angle_tolerance_rad", &A::angle_tolerance_rad, 0, 0.78, "rad",
+       "parallel/orthogonal to line 1 within this, else not mapped"},
+      {"constraint_sigma_rad", &A::constraint_sigma_rad, 1e-9, 1, "rad", "pseudo-measurement noise, eqs. (11)-(12)"},
+      {"collinear_sigma_m", &A::collinear_sigma_m, 1e-9, 1, "m", "collinear pseudo-measurement noise, eq. (12)"},
+      {"collinear_max_m", &A::collinear_max_m, 0, 1, "m",
+       "a collinear piece is tied to a mapped line only within this offset"},
+      {"collinear_min_length_m", &A::collinear_min_length_m, 0, 100, "m",
+       "... and only to one at least this long (a wall, not a face)"},
+      {"measurement_cov_scale", &A::measurement_cov_scale, 1e-6, 1e6, "", "multiplies the eq. (7) covariance"},
+      {"max_mahalanobis2", &A::max_mahalanobis2, 0.1, 1e9, "", "innovation gate of a match (chi^2, 2 dof)"},
+      {"use_constraints", &A::use_constraints, 0, 0, "", "false: plain EKF (comparison, Fig. 17)"},
+      {"pin_first_line", &A::pin_first_line, 0, 0, "",
+       "true: the paper's pinned theta_1 (less accurate, docs/accuracy.md)"},
+  };
+  return kKeys;
+}
+
 }  // namespace irslam::slam

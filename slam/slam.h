@@ -28,6 +28,7 @@
 #include "slam/line_extraction.h"
 #include "slam/odometry.h"
 #include "types/geometry.h"
+#include "types/options.h"
 #include "types/signals.h"
 
 namespace irslam::slam {
@@ -93,6 +94,12 @@ struct SlamStats {
   int merges = 0;
   int loop_closures = 0;    // merges into the first line
 };
+
+// Config section [slam]: SlamKeys() (with MotionNoiseKeys()), and its
+// subsections [slam.pds], [slam.association].
+options::Table<SlamOptions> SlamKeys();
+options::Table<PdsOptions> PdsKeys();
+options::Table<AssociationOptions> AssociationKeys();
 
 class Slam {
  public:

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include "types/options.h"
+
 namespace irslam {
 
 inline constexpr int kNumIrSensors = 7;
@@ -23,6 +25,19 @@ struct RobotGeometry {
 
   double metres_per_count() const { return 2.0 * M_PI * wheel_radius_m / counts_per_rev; }
 };
+
+// Config section [robot].
+inline options::Table<RobotGeometry> RobotGeometryKeys() {
+  using G = RobotGeometry;
+  static constexpr options::Key<G> kKeys[] = {
+      {"wheel_base_m", &G::wheel_base_m, 0.05, 2.0, "m", "distance between the wheel contact points"},
+      {"wheel_radius_m", &G::wheel_radius_m, 0.005, 0.5, "m", "wheel radius"},
+      {"counts_per_rev", &G::counts_per_rev, 1, 1e7, "", "encoder counts per wheel revolution"},
+      {"radius_m", &G::radius_m, 0.05, 2.0, "m", "body radius (round robot)"},
+      {"max_wheel_speed_mps", &G::max_wheel_speed_mps, 0.01, 5.0, "m/s", "fastest wheel speed commanded"},
+  };
+  return kKeys;
+}
 
 // Where an IR sensor sits on the robot (robot frame: x forward, y left).
 struct SensorMount {

@@ -24,6 +24,8 @@ status=0
 for t in "${targets[@]}"; do
   work=$build/corpus/$t  # new inputs go here, the committed seeds stay as they are
   mkdir -p "$work"
+  # The shipped config is a seed too (not copied into the corpus: one file).
+  if [ "$t" = config ]; then cp "$IRSLAM_ROOT/daemon/irslamd.conf" "$work/shipped.conf"; fi
   echo "fuzz.sh: $t for ${seconds}s" >&2
   if ! "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
        -max_len=8192 -print_final_stats=1 -artifact_prefix="$build/artifacts/$t-" \

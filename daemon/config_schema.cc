@@ -1,0 +1,232 @@
+#include "daemon/config_schema.h"
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace irslam::control {
+// TEMPORARY (daemon/control_keys_tmp.cc) until control/ declares its own tables.
+options::Table<WallFollowerOptions> WallFollowerKeys();
+options::Table<MissionOptions> MissionKeys();
+options::Table<ModelOptions> ModelKeys();
+options::Table<ExploreOptions> ExploreKeys();
+}  // namespace irslam::control
+
+namespace irslam::config {
+namespace {
+
+using nlohmann::json;
+
+// The core's own loose settings (robot::CoreOptions members outside a component).
+options::Table<robot::CoreOptions> ControlPeriodKeys() {
+  static constexpr options::Key<robot::CoreOptions> kKeys[] = {
+      {"period_s", &robot::CoreOptions::period_s, 0.001, 1.0, "s", "control loop period (robot time)"},
+  };
+  return kKeys;
+}
+
+options::Table<robot::CoreOptions> HeartbeatKeys() {
+  static constexpr options::Key<robot::CoreOptions> kKeys[] = {
+      {"heartbeat_period_s", &robot::CoreOptions::heartbeat_period_s, 0.01, 10, "s",
+       "DAEMON_HEARTBEAT period"},
+  };
+  return kKeys;
+}
+
+options::Table<robot::CoreOptions> StateKeys() {
+  static constexpr options::Key<robot::CoreOptions> kKeys[] = {
+      {"dir", &robot::CoreOptions::state_dir, 0, 0, "",
+       "the map is saved here (map.json; systemd StateDirectory=irslam)"},
+  };
+  return kKeys;
+}
+
+options::Table<robot::ApiSettings> ApiKeys() {
+  using A = robot::ApiSettings;
+  static constexpr options::Key<A> kKeys[] = {
+      {"socket_group", &A::socket_group, 0, 0, "", "chgrp the socket to this group (\"\": the daemon's group)"},
+      {"read_group", &A::read_group, 0, 0, "", "may call status/map/subscribe (\"\": anyone who can connect)"},
+      {"control_group", &A::control_group, 0, 0, "", "may call start/stop too (\"\": anyone who can connect)"},
+      {"max_clients", &A::max_clients, 1, 1024, "", "connected clients at most"},
+      {"max_line_bytes", &A::max_line_bytes, 256, 1024 * 1024, "bytes",
+       "a longer request line: error, connection closed"},
+      {"idle_timeout_s", &A::idle_timeout_s, 0.1, 1e6, "s", "clients that send nothing (and are not subscribed)"},
+      {"max_pending_bytes", &A::max_pending_bytes, 4096, 256 * 1024 * 1024, "bytes",
+       "unread output beyond this: the client is dropped"},
+  };
+  return kKeys;
+}
+
+options::Table<drivers::GpioSettings> GpioKeys() {
+  static constexpr options::Key<drivers::GpioSettings> kKeys[] = {
+      {"debounce_s", &drivers::GpioSettings::debounce_s, 0, 1, "s",
+       "a release counts once stable this long (presses act at once)"},
+  };
+  return kKeys;
+}
+
+// "" or "KEY what" for a value that is not [x_m, y_m, theta_rad] x 7.
+std::string ReadMounts(const json& m, robot::CoreOptions* o) {
+  if (!m.is_array()) return " must be an array";
+  if (m.size() != kNumIrSensors) return " must list exactly 7 sensors as [x_m, y_m, theta_rad]";
+  for (size_t i = 0; i < m.size(); ++i) {
+    const json& p = m[i];
+    if (!p.is_array() || p.size() != 3 || !p[0].is_number() || !p[1].is_number() || !p[2].is_number()) {
+      return "[" + std::to_string(i) + "] must be [x_m, y_m, theta_rad]";
+    }
+    o->slam.mounts[i] = {p[0].get<double>(), p[1].get<double>(), p[2].get<double>()};
+  }
+  return "";
+}
+
+std::string ReadIrTable(const json& t, robot::CoreOptions* o) {
+  if (!t.is_array()) return " must be an array";
+  std::vector<std::pair<double, double>> table;
+  for (size_t i = 0; i < t.size(); ++i) {
+    const json& p = t[i];
+    if (!p.is_array() || p.size() != 2 || !p[0].is_number() || !p[1].is_number()) {
+      return "[" + std::to_string(i) + "] must be [distance_m, volts]";
+    }
+    table.emplace_back(p[0].get<double>(), p[1].get<double>());
+  }
+  o->ir.table = table;
+  return "";
+}
+
+std::string ReadGpioLine(const json& j, drivers::GpioLineSpec* out) {
+  if (!j.is_object()) return " must be an object";
+  for (const auto& [k, v] : j.items()) {
+    if (k == "chip") {
+      if (!v.is_string()) return ".chip must be a string";
+      out->chip = v.get<std::string>();
+    } else if (k == "line") {
+      if (v.is_number_unsigned()) {
+        out->line = std::to_string(v.get<uint64_t>());
+      } else if (v.is_string()) {
+        out->line = v.get<std::string>();
+      } else {
+        return ".line must be a line name or an offset";
+      }
+    } else if (k == "active_low") {
+      if (!v.is_boolean()) return ".active_low must be true or false";
+      out->active_low = v.get<bool>();
+    } else {
+      return "." + k + " is not a known key";
+    }
+  }
+  if (!out->chip.empty() && out->line.empty()) return ".line must be given when chip is";
+  return "";
+}
+
+json DumpGpioLine(const drivers::GpioLineSpec& l) {
+  return {{"chip", l.chip}, {"line", l.line}, {"active_low", l.active_low}};
+}
+
+void WalkGpio(robot::CoreOptions* o, Visitor* v) {
+  v->Section("gpio", "optional safety lines (libgpiod; docs/gpio.md). Each line: \"chip\" = label, name "
+                     "(gpiochip0), path or number (\"\": not fitted), \"line\" = line name or offset, "
+                     "\"active_low\" = pressed/on is the low level");
+  auto& g = o->gpio;
+  const struct {
+    std::string_view name, doc;
+    drivers::GpioLineSpec* line;
+  } lines[] = {{"estop", "input: emergency stop", &g.estop},
+               {"bumper_left", "input: left bumper", &g.bumper_left},
+               {"bumper_right", "input: right bumper", &g.bumper_right},
+               {"motor_enable", "output: motor-driver enable", &g.motor_enable},
+               {"status_led", "output: status LED", &g.status_led}};
+  for (const auto& l : lines) {
+    drivers::GpioLineSpec* spec = l.line;
+    v->Custom({l.name, l.doc, [spec](const json& j) { return ReadGpioLine(j, spec); },
+               [spec] { return DumpGpioLine(*spec); }});
+  }
+  v->Keys(&g, GpioKeys());
+  v->End();
+}
+
+void WalkSensors(robot::CoreOptions* o, Visitor* v) {
+  v->Section("sensors", "");
+  v->Custom({"mounts",
+             "seven IR sensors [x_m, y_m, theta_rad] in the robot frame (x forward, y left), ordered right "
+             "(-90 deg) to left (+90 deg); sensor 0 must look right and 3 straight ahead",
+             [o](const json& j) { return ReadMounts(j, o); },
+             [o] {
+               json mounts = json::array();
+               for (const auto& m : o->slam.mounts) mounts.push_back({m.x, m.y, m.theta});
+               return mounts;
+             }});
+  v->Custom({"table", "Sharp GP2Y0A02-like output: [distance_m, volts] pairs, interpolated",
+             [o](const json& j) { return ReadIrTable(j, o); },
+             [o] {
+               json table = json::array();
+               for (const auto& [d, volts] : o->ir.table) table.push_back({d, volts});
+               return table;
+             }});
+  v->Keys(&o->ir, drivers::IrCalibrationKeys());
+  v->End();
+}
+
+void WalkSlam(robot::CoreOptions* o, Visitor* v) {
+  v->Section("slam", "");
+  v->Keys(&o->slam, slam::SlamKeys());
+  v->Keys(&o->slam.motion_noise, slam::MotionNoiseKeys());
+  v->Section("pds", "pseudo dense scan (paper section 3.1)");
+  v->Keys(&o->slam.pds, slam::PdsKeys());
+  v->End();
+  v->Section("extraction", "multi-level filter (paper sections 3.1-3.5)");
+  v->Keys(&o->slam.extraction, slam::ExtractionKeys());
+  v->End();
+  v->Section("association", "constrained EKF (paper section 4)");
+  v->Keys(&o->slam.association, slam::AssociationKeys());
+  v->End();
+  v->End();
+}
+
+}  // namespace
+
+void WalkConfig(robot::CoreOptions* o, Visitor* v) {
+  v->Section("api", "the control socket (irslamd only)");
+  v->Keys(&o->api, ApiKeys());
+  v->End();
+  v->Section("state", "");
+  v->Keys(o, StateKeys());
+  v->End();
+  WalkGpio(o, v);
+  v->Section("robot", "");
+  v->Keys(&o->slam.geometry, RobotGeometryKeys());
+  v->End();
+  WalkSensors(o, v);
+  v->Section("controller", "");
+  v->Keys(&o->motor, drivers::MotorClientKeys());
+  v->Keys(o, HeartbeatKeys());
+  v->End();
+  v->Section("control", "");
+  v->Keys(o, ControlPeriodKeys());
+  v->End();
+  v->Section("wall_follow", "following the wall on the right (paper section 5)");
+  v->Keys(&o->wall, control::WallFollowerKeys());
+  v->End();
+  v->Section("mission", "");
+  v->Keys(&o->mission, control::MissionKeys());
+  v->End();
+  v->Section("model", "the room and furniture from the line map (paper section 5)");
+  v->Keys(&o->model, control::ModelKeys());
+  v->End();
+  v->Section("exploration", "go to P1, contour following, surveys");
+  v->Keys(&o->explore, control::ExploreKeys());
+  v->End();
+  WalkSlam(o, v);
+}
+
+std::string CheckConfig(const robot::CoreOptions& o) {
+  if (o.state_dir.empty()) return "state.dir must not be empty";
+  const std::string ir = o.ir.Validate();
+  if (!ir.empty()) return ir;
+  const auto& a = o.slam.association;
+  if (std::abs(a.weight_rho + a.weight_theta - 1) > 1e-9) {
+    return "slam.association.weight_rho + weight_theta must be 1";
+  }
+  return "";
+}
+
+}  // namespace irslam::config
