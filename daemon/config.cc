@@ -1,7 +1,5 @@
 #include "daemon/config.h"
 
-#include <cmath>
-#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
@@ -16,7 +14,8 @@ namespace {
 
 using nlohmann::json;
 using config::CustomKey;
-using Entry = config::Visitor::Entry;
+using options::Entry;
+using options::FormatNumber;
 
 // A config file is a few kB; anything much larger is not one.
 constexpr size_t kMaxConfigBytes = 1 << 20;
@@ -25,12 +24,6 @@ std::string Join(const std::vector<std::string>& path, std::string_view key) {
   std::string out;
   for (const auto& p : path) out += p + ".";
   return out + std::string(key);
-}
-
-std::string FormatNumber(double d) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.12g", d);
-  return buf;
 }
 
 // Parses: sets the options from the file's values, remembering which keys were
@@ -75,34 +68,8 @@ class Reader : public config::Visitor {
   void Key(const Entry& e) override {
     const json* v = Use(e.name);
     if (v == nullptr) return;
-    const std::string name = Join(path_, e.name);
-    switch (e.kind) {
-      case Entry::Kind::kBool:
-        if (!v->is_boolean()) return Fail(name + " must be true or false");
-        *e.flag = v->get<bool>();
-        return;
-      case Entry::Kind::kString:
-        if (!v->is_string()) return Fail(name + " must be a string");
-        *e.text = v->get<std::string>();
-        return;
-      case Entry::Kind::kNumber:
-      case Entry::Kind::kInt: {
-        if (!v->is_number()) return Fail(name + " must be a number");
-        const double d = v->get<double>();
-        if (!(d >= e.lo && d <= e.hi)) {
-          return Fail(name + " must be in [" + FormatNumber(e.lo) + ", " + FormatNumber(e.hi) + "] (got " +
-                      FormatNumber(d) + ")");
-        }
-        if (e.kind == Entry::Kind::kNumber) {
-          *e.number = d;
-        } else if (d != std::floor(d)) {
-          Fail(name + " must be an integer");
-        } else {
-          *e.integer = static_cast<int>(d);
-        }
-        return;
-      }
-    }
+    const std::string what = options::ReadEntry(*v, e);
+    if (!what.empty()) Fail(Join(path_, e.name) + what);
   }
 
   // The top level's unknown keys.
@@ -148,16 +115,7 @@ class Dumper : public config::Visitor {
     names_.pop_back();
   }
   void Custom(const CustomKey& key) override { stack_.back()[std::string(key.name)] = key.dump(); }
-  void Key(const Entry& e) override { stack_.back()[std::string(e.name)] = Value(e); }
-  static json Value(const Entry& e) {
-    switch (e.kind) {
-      case Entry::Kind::kBool: return *e.flag;
-      case Entry::Kind::kString: return *e.text;
-      case Entry::Kind::kInt: return *e.integer;
-      case Entry::Kind::kNumber: break;
-    }
-    return *e.number;
-  }
+  void Key(const Entry& e) override { stack_.back()[std::string(e.name)] = options::EntryValue(e); }
   json Take() { return std::move(stack_.front()); }
 
  private:
@@ -193,7 +151,7 @@ class Documenter : public config::Visitor {
     }
     if (!range.empty()) doc += (doc.empty() ? "" : " ") + ("[" + range + "]");
     Comment(doc);
-    Item(Quote(e.name) + ": " + DumpJson(Dumper::Value(e)));
+    Item(Quote(e.name) + ": " + DumpJson(options::EntryValue(e)));
   }
   std::string Take() { return out_ + "\n}\n"; }
 

@@ -12,6 +12,7 @@
 #include <string>
 #include <string_view>
 
+#include "io/option_json.h"
 #include "robot/robot_core.h"
 #include "types/options.h"
 
@@ -34,33 +35,11 @@ class Visitor {
   virtual void Section(std::string_view name, std::string_view doc) = 0;
   virtual void End() = 0;
   virtual void Custom(const CustomKey& key) = 0;
-  // One entry of a table, type-erased: the entry's metadata and access to its value.
-  struct Entry {
-    std::string_view name, unit, doc;
-    double lo = 0, hi = 0;
-    enum class Kind { kNumber, kInt, kBool, kString } kind = Kind::kNumber;
-    double* number = nullptr;
-    int* integer = nullptr;
-    bool* flag = nullptr;
-    std::string* text = nullptr;
-  };
-  virtual void Key(const Entry& entry) = 0;
+  virtual void Key(const options::Entry& entry) = 0;
 
   template <class T>
   void Keys(T* object, options::Table<T> table) {
-    for (const auto& k : table) {
-      Entry e{k.name, k.unit, k.doc, k.lo, k.hi};
-      if (auto* m = std::get_if<double T::*>(&k.member)) {
-        e.kind = Entry::Kind::kNumber, e.number = &(object->**m);
-      } else if (auto* i = std::get_if<int T::*>(&k.member)) {
-        e.kind = Entry::Kind::kInt, e.integer = &(object->**i);
-      } else if (auto* b = std::get_if<bool T::*>(&k.member)) {
-        e.kind = Entry::Kind::kBool, e.flag = &(object->**b);
-      } else {
-        e.kind = Entry::Kind::kString, e.text = &(object->*std::get<std::string T::*>(k.member));
-      }
-      Key(e);
-    }
+    for (const auto& e : options::Bind(object, table)) Key(e);
   }
 };
 

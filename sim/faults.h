@@ -18,8 +18,8 @@
 //
 // Times are robot seconds. Probabilities apply to the controller's frames
 // (ENCODER, CTRL_STATUS, IR_A, IR_B).
-#ifndef IRSLAM_TESTS_SIM_FAULTS_H_
-#define IRSLAM_TESTS_SIM_FAULTS_H_
+#ifndef IRSLAM_SIM_FAULTS_H_
+#define IRSLAM_SIM_FAULTS_H_
 
 #include <linux/can.h>
 
@@ -100,4 +100,4 @@ class FaultInjector {
 
 }  // namespace irslam::sim
 
-#endif  // IRSLAM_TESTS_SIM_FAULTS_H_
+#endif  // IRSLAM_SIM_FAULTS_H_

@@ -18,6 +18,7 @@
 #include "proto/codec.h"
 #include "io/json_text.h"
 #include "sim/faults.h"
+#include "sim/generator.h"
 #include "sim/sim_controller.h"
 #include "sim/sim_run.h"
 
@@ -250,6 +251,25 @@ int Serve(const Common& c, const std::string& iface, double time_scale) {
   return 0;
 }
 
+int Generate(uint64_t seed, const std::string& profile_name, const std::string& out) {
+  const auto profile = ParseNoiseProfile(profile_name);
+  if (!profile) {
+    std::fprintf(stderr, "irslam-sim: --profile must be nominal, realistic or harsh (got '%s')\n",
+                 profile_name.c_str());
+    return kExitUsage;
+  }
+  const nlohmann::json world = WorldToJson(GenerateWorld(seed, *profile));
+  if (out.empty()) {
+    std::printf("%s\n", world.dump(1).c_str());
+    return 0;
+  }
+  if (!WriteJson(out, world)) {
+    std::fprintf(stderr, "irslam-sim: cannot write %s\n", out.c_str());
+    return 1;
+  }
+  return 0;
+}
+
 }  // namespace
 }  // namespace irslam::sim
 
@@ -289,11 +309,18 @@ int main(int argc, char** argv) {
   serve->add_option("--can", iface, "vcan0, can0 or unix:PATH")->required();
   serve->add_option("--time-scale", time_scale, "Robot time runs K times faster than wall time")
       ->check(CLI::Range(0.01, 1000.0));
+  auto* generate = app.add_subcommand("generate", "Write a random world (the robustness campaign's rooms)");
+  uint64_t gen_seed = 1;
+  std::string profile = "nominal", gen_out;
+  generate->add_option("--seed", gen_seed, "Same seed, same world")->required();
+  generate->add_option("--profile", profile, "Noise profile: nominal, realistic or harsh");
+  generate->add_option("--out", gen_out, "Write the world file here (default: standard output)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
+  if (*generate) return irslam::sim::Generate(gen_seed, profile, gen_out);
   if (*run) return irslam::sim::Run(common, max_time, map_out, svg_out, lines_out, events_out);
   return irslam::sim::Serve(common, iface, time_scale);
 }

@@ -13,10 +13,35 @@ SimController::SimController(World world, SimOptions options, uint64_t seed)
       calibration_(options_.ir),
       segments_(world_.Segments()),
       rng_(seed),
+      effects_rng_(seed ^ 0x9e3779b97f4a7c15ULL),
       pose_(world_.start),
       odom_pose_(world_.start),
       next_encoder_(options_.encoder_period_s),
-      next_status_(options_.status_period_s) {}
+      next_status_(options_.status_period_s) {
+  surface_bias_m_.assign(segments_.size(), 0.0);
+  if (world_.noise.ir_surface_bias_m > 0) {
+    std::uniform_real_distribution<double> bias(-world_.noise.ir_surface_bias_m, world_.noise.ir_surface_bias_m);
+    for (double& b : surface_bias_m_) b = bias(effects_rng_);
+  }
+}
+
+std::pair<double, double> SimController::Slip(double dt, double turn_rate) {
+  const SimNoise& n = world_.noise;
+  if (n.slip_correlation_s <= 0) {
+    // White slip per physics step (the default).
+    std::normal_distribution<double> slip(0.0, n.slip_sigma);
+    const double l = slip(rng_);
+    return {l, slip(rng_)};
+  }
+  // Ornstein-Uhlenbeck per wheel: stationary sigma slip_sigma, correlation time
+  // slip_correlation_s; it grows with the turn rate (a wheel scrubs in turns).
+  const double a = std::exp(-dt / n.slip_correlation_s);
+  std::normal_distribution<double> w(0.0, n.slip_sigma * std::sqrt(1 - a * a));
+  slip_l_ = a * slip_l_ + w(effects_rng_);
+  slip_r_ = a * slip_r_ + w(effects_rng_);
+  const double grow = 1.0 + std::abs(turn_rate);  // x2 at 1 rad/s
+  return {slip_l_ * grow, slip_r_ * grow};
+}
 
 void SimController::HandleFrame(const can_frame& frame) {
   const proto::DecodeResult r = proto::Decode(frame);
@@ -62,12 +87,13 @@ void SimController::PhysicsStep(double dt) {
   vl_ = std::clamp(tl, vl_ - dv, vl_ + dv);
   vr_ = std::clamp(tr, vr_ - dv, vr_ + dv);
 
-  // Ground motion: true radii differ slightly from nominal, and wheels slip.
-  std::normal_distribution<double> slip(0.0, world_.noise.slip_sigma);
-  const double gl = vl_ * dt * (1.0 + world_.noise.wheel_radius_error_left) * (1.0 + slip(rng_));
-  const double gr = vr_ * dt * (1.0 + world_.noise.wheel_radius_error_right) * (1.0 + slip(rng_));
+  // Ground motion: true radii and track width differ from nominal, and wheels slip.
+  const double true_base = options_.geometry.wheel_base_m * (1.0 + world_.noise.wheel_base_error);
+  const auto [slip_l, slip_r] = Slip(dt, (vr_ - vl_) / true_base);
+  const double gl = vl_ * dt * (1.0 + world_.noise.wheel_radius_error_left) * (1.0 + slip_l);
+  const double gr = vr_ * dt * (1.0 + world_.noise.wheel_radius_error_right) * (1.0 + slip_r);
   const double ds = 0.5 * (gl + gr);
-  const double dth = (gr - gl) / options_.geometry.wheel_base_m;
+  const double dth = (gr - gl) / true_base;
   const double mid = pose_.theta + 0.5 * dth;
   Pose2 next{pose_.x + ds * std::cos(mid), pose_.y + ds * std::sin(mid),
              NormalizeAngle(pose_.theta + dth)};
@@ -105,6 +131,29 @@ void SimController::PhysicsStep(double dt) {
   counts_r_ = static_cast<int64_t>(std::floor(wheel_angle_r_ / (2 * M_PI) * cpr));
 }
 
+double SimController::SurfaceEffects(std::optional<double>* range, size_t seg, double angle) {
+  const SimNoise& n = world_.noise;
+  double gain = 1.0;
+  if (n.ir_max_incidence_deg < 90) {
+    // Incidence: the angle between the beam and the surface's normal.
+    const Segment& sg = segments_[seg];
+    const double ex = sg.b.x - sg.a.x, ey = sg.b.y - sg.a.y;
+    const double along = std::abs(std::cos(angle) * ex + std::sin(angle) * ey) / std::hypot(ex, ey);
+    const double incidence = std::asin(std::min(1.0, along));  // 0: head-on
+    if (incidence > n.ir_max_incidence_deg * M_PI / 180.0) {
+      range->reset();  // grazing: nothing comes back
+      return 1.0;
+    }
+    gain = 1.0 / std::max(0.2, std::cos(incidence));
+  }
+  **range += surface_bias_m_[seg];
+  if (n.ir_outlier_rate > 0) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    if (u(effects_rng_) < n.ir_outlier_rate) *range = 0.1 + 1.4 * u(effects_rng_);
+  }
+  return gain;
+}
+
 void SimController::SampleIr(std::vector<can_frame>* out) {
   std::array<uint16_t, kNumIrSensors> adc{};
   const double half_beam = 0.5 * world_.noise.ir_beam_deg * M_PI / 180.0;
@@ -113,14 +162,18 @@ void SimController::SampleIr(std::vector<can_frame>* out) {
                                     options_.mounts[i].theta});
     // The beam returns the nearest surface inside its cone.
     std::optional<double> best;
+    size_t best_seg = 0;
+    double best_angle = s.theta;
     constexpr int kRays = 5;
     for (int k = 0; k < kRays; ++k) {
       const double a = s.theta - half_beam + 2 * half_beam * k / (kRays - 1);
-      const auto d = RayCast(segments_, {s.x, s.y}, a, 10.0);
-      if (d && (!best || *d < *best)) best = d;
+      size_t seg = 0;
+      const auto d = RayCast(segments_, {s.x, s.y}, a, 10.0, &seg);
+      if (d && (!best || *d < *best)) best = d, best_seg = seg, best_angle = a;
     }
+    const double noise_gain = best ? SurfaceEffects(&best, best_seg, best_angle) : 1.0;
     double volts = best ? calibration_.DistanceToVolts(*best) : 0.3;
-    std::normal_distribution<double> noise(0.0, world_.noise.ir_voltage_sigma_rel * volts);
+    std::normal_distribution<double> noise(0.0, world_.noise.ir_voltage_sigma_rel * volts * noise_gain);
     volts = std::max(0.0, volts + noise(rng_));
     adc[i] = calibration_.VoltsToCounts(volts);
   }

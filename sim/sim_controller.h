@@ -4,8 +4,8 @@
 // that stop the robot and set a bumper bit, and the controller's CAN protocol
 // (proto/irslam.dbc): it stops the wheels when commands stop for 200 ms.
 // Pure: time advances only through AdvanceTo(). Seeded, reproducible.
-#ifndef IRSLAM_TESTS_SIM_SIM_CONTROLLER_H_
-#define IRSLAM_TESTS_SIM_SIM_CONTROLLER_H_
+#ifndef IRSLAM_SIM_SIM_CONTROLLER_H_
+#define IRSLAM_SIM_SIM_CONTROLLER_H_
 
 #include <linux/can.h>
 
@@ -59,6 +59,11 @@ class SimController {
  private:
   void PhysicsStep(double dt);
   void SampleIr(std::vector<can_frame>* out);
+  // Wheel slip (relative, left and right) for one physics step.
+  std::pair<double, double> Slip(double dt, double turn_rate);
+  // Surface bias, incidence drop-out and outliers applied to a return from
+  // segment seg along the ray at angle; returns the factor on the voltage noise.
+  double SurfaceEffects(std::optional<double>* range, size_t seg, double angle);
   double Clearance(const Pose2& p, uint8_t* bumpers) const;
 
   World world_;
@@ -66,6 +71,11 @@ class SimController {
   drivers::IrCalibration calibration_;
   std::vector<Segment> segments_;
   std::mt19937_64 rng_;
+  // The error envelope's effects draw from their own generator, so a world
+  // without them sees exactly the random sequence it always did.
+  std::mt19937_64 effects_rng_;
+  std::vector<double> surface_bias_m_;  // per segment
+  double slip_l_ = 0, slip_r_ = 0;      // correlated slip state
   double t_ = 0;
   Pose2 pose_;
   Pose2 odom_pose_;
@@ -90,4 +100,4 @@ class SimController {
 
 }  // namespace irslam::sim
 
-#endif  // IRSLAM_TESTS_SIM_SIM_CONTROLLER_H_
+#endif  // IRSLAM_SIM_SIM_CONTROLLER_H_

@@ -1,7 +1,7 @@
 // The in-process mission: the simulated controller and a RobotCore exchanging
 // the same CAN frames as over a bus, as fast as the CPU allows.
-#ifndef IRSLAM_TESTS_SIM_SIM_RUN_H_
-#define IRSLAM_TESTS_SIM_SIM_RUN_H_
+#ifndef IRSLAM_SIM_SIM_RUN_H_
+#define IRSLAM_SIM_SIM_RUN_H_
 
 #include <functional>
 #include <memory>
@@ -32,4 +32,4 @@ InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options,
 
 }  // namespace irslam::sim
 
-#endif  // IRSLAM_TESTS_SIM_SIM_RUN_H_
+#endif  // IRSLAM_SIM_SIM_RUN_H_

@@ -8,6 +8,7 @@
 
 #include "io/file_io.h"
 #include "io/json_text.h"
+#include "io/option_json.h"
 
 namespace irslam::sim {
 namespace {
@@ -27,7 +28,54 @@ bool ReadNumbers(const json& j, size_t n, std::vector<double>* out) {
   return std::all_of(out->begin(), out->end(), [](double d) { return std::isfinite(d); });
 }
 
+// Whether p is inside the room's outline (ray crossing; points on an edge count).
+bool InsideOutline(const std::vector<Vec2>& poly, Vec2 p) {
+  bool inside = false;
+  for (size_t i = 0, k = poly.size() - 1; i < poly.size(); k = i++) {
+    const Vec2 a = poly[i], b = poly[k];
+    if ((a.y > p.y) != (b.y > p.y) && p.x < (b.x - a.x) * (p.y - a.y) / (b.y - a.y) + a.x) inside = !inside;
+  }
+  return inside;
+}
+
+// A box lies in the room when its centre and its corners (pulled 1 mm inwards,
+// so a box against a wall counts) are inside the outline.
+bool InsideRoom(const World& w, const Box& o) {
+  constexpr double kIn = 1e-3;
+  const Vec2 pts[] = {{(o.xmin + o.xmax) / 2, (o.ymin + o.ymax) / 2},
+                      {o.xmin + kIn, o.ymin + kIn}, {o.xmax - kIn, o.ymin + kIn},
+                      {o.xmax - kIn, o.ymax - kIn}, {o.xmin + kIn, o.ymax - kIn}};
+  for (const Vec2& p : pts) {
+    if (!InsideOutline(w.outline, p)) return false;
+  }
+  return true;
+}
+
 }  // namespace
+
+options::Table<SimNoise> SimNoiseKeys() {
+  using N = SimNoise;
+  static constexpr options::Key<N> kKeys[] = {
+      {"wheel_radius_error_left", &N::wheel_radius_error_left, -0.5, 0.5, "",
+       "relative error of the left wheel's true radius"},
+      {"wheel_radius_error_right", &N::wheel_radius_error_right, -0.5, 0.5, "",
+       "relative error of the right wheel's true radius"},
+      {"slip_sigma", &N::slip_sigma, 0, 1, "", "wheel slip, relative, per physics step, per wheel"},
+      {"ir_voltage_sigma_rel", &N::ir_voltage_sigma_rel, 0, 1, "", "IR output noise, relative to the voltage"},
+      {"ir_period_s", &N::ir_period_s, 0.005, 1, "s", "IR measurement period"},
+      {"ir_period_jitter_s", &N::ir_period_jitter_s, 0, 1, "s", "IR measurement period jitter"},
+      {"ir_beam_deg", &N::ir_beam_deg, 0, 90, "deg", "IR beam width"},
+      {"wheel_base_error", &N::wheel_base_error, -0.5, 0.5, "", "relative error of the true track width"},
+      {"slip_correlation_s", &N::slip_correlation_s, 0, 60, "s",
+       "> 0: slip correlated over this time and growing in turns (carpet); 0: white per step"},
+      {"ir_surface_bias_m", &N::ir_surface_bias_m, 0, 0.5, "m",
+       "each wall and object face gets a fixed range bias drawn from +- this"},
+      {"ir_max_incidence_deg", &N::ir_max_incidence_deg, 10, 90, "deg",
+       "returns beyond this incidence angle drop out; noise grows as 1/cos(incidence)"},
+      {"ir_outlier_rate", &N::ir_outlier_rate, 0, 1, "", "fraction of readings that are a uniform random range"},
+  };
+  return kKeys;
+}
 
 std::vector<Segment> World::Segments() const {
   std::vector<Segment> s;
@@ -64,6 +112,13 @@ std::optional<World> ParseWorld(std::string_view text, std::string* error) {
   if (!j.is_object()) {
     *error = "world: the top level must be an object";
     return std::nullopt;
+  }
+  for (const auto& [key, value] : j.items()) {
+    static constexpr std::string_view kKnown[] = {"name", "room", "outline", "objects", "start", "seed", "noise"};
+    if (std::find(std::begin(kKnown), std::end(kKnown), key) == std::end(kKnown)) {
+      *error = "world: \"" + key + "\" is not a known key";
+      return std::nullopt;
+    }
   }
   World w;
   std::vector<double> v;
@@ -126,6 +181,18 @@ std::optional<World> ParseWorld(std::string_view text, std::string* error) {
     *error = "world: \"start\" lies outside the room";
     return std::nullopt;
   }
+  for (size_t i = 0; i < w.objects.size(); ++i) {
+    const Box& o = w.objects[i];
+    const std::string which = "world: \"objects\"[" + std::to_string(i) + "]";
+    if (!InsideRoom(w, o)) {
+      *error = which + " lies outside the room";
+      return std::nullopt;
+    }
+    if (w.start.x > o.xmin && w.start.x < o.xmax && w.start.y > o.ymin && w.start.y < o.ymax) {
+      *error = "world: \"start\" lies inside " + which.substr(7);
+      return std::nullopt;
+    }
+  }
   if (j.contains("seed")) {
     if (!j["seed"].is_number_integer()) {
       *error = "world: \"seed\" must be an integer";
@@ -134,32 +201,8 @@ std::optional<World> ParseWorld(std::string_view text, std::string* error) {
     w.seed = j["seed"].get<uint64_t>();
   }
   if (j.contains("noise")) {
-    const json& n = j["noise"];
-    if (!n.is_object()) {
-      *error = "world: \"noise\" must be an object";
-      return std::nullopt;
-    }
-    const std::pair<const char*, double*> keys[] = {
-        {"wheel_radius_error_left", &w.noise.wheel_radius_error_left},
-        {"wheel_radius_error_right", &w.noise.wheel_radius_error_right},
-        {"slip_sigma", &w.noise.slip_sigma},
-        {"ir_voltage_sigma_rel", &w.noise.ir_voltage_sigma_rel},
-        {"ir_period_s", &w.noise.ir_period_s},
-        {"ir_period_jitter_s", &w.noise.ir_period_jitter_s},
-        {"ir_beam_deg", &w.noise.ir_beam_deg},
-    };
-    for (const auto& [k, p] : keys) {
-      if (!n.contains(k)) continue;
-      const bool signed_ok = std::string_view(k).rfind("wheel_radius_error", 0) == 0;
-      if (!n[k].is_number() || n[k].get<double>() < (signed_ok ? -0.5 : 0.0)) {
-        *error = std::string("world: \"noise.") + k + "\" must be a number >= " +
-                 (signed_ok ? "-0.5" : "0");
-        return std::nullopt;
-      }
-      *p = n[k].get<double>();
-    }
-    if (w.noise.ir_period_s < 0.005) {
-      *error = "world: \"noise.ir_period_s\" must be >= 0.005";
+    if (!options::ReadObject(j["noise"], "noise", options::Bind(&w.noise, SimNoiseKeys()), error)) {
+      *error = "world: " + *error;
       return std::nullopt;
     }
   }
@@ -178,10 +221,11 @@ std::optional<World> LoadWorldFile(const std::string& path, std::string* error) 
 }
 
 std::optional<double> RayCast(const std::vector<Segment>& segs, Vec2 p, double angle,
-                              double max_range) {
+                              double max_range, size_t* hit) {
   const double dx = std::cos(angle), dy = std::sin(angle);
   std::optional<double> best;
-  for (const Segment& s : segs) {
+  for (size_t i = 0; i < segs.size(); ++i) {
+    const Segment& s = segs[i];
     const double ex = s.b.x - s.a.x, ey = s.b.y - s.a.y;
     const double den = dx * ey - dy * ex;
     if (std::abs(den) < 1e-12) continue;
@@ -189,7 +233,10 @@ std::optional<double> RayCast(const std::vector<Segment>& segs, Vec2 p, double a
     const double t = (wx * ey - wy * ex) / den;  // along the ray
     const double u = (wx * dy - wy * dx) / den;  // along the segment
     if (t < 0 || u < 0 || u > 1 || t > max_range) continue;
-    if (!best || t < *best) best = t;
+    if (!best || t < *best) {
+      best = t;
+      if (hit != nullptr) *hit = i;
+    }
   }
   return best;
 }

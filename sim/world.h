@@ -1,7 +1,7 @@
 // Simulated worlds (contracts.md §1): a rectangular or orthogonal-polygon room with
 // axis-aligned boxes, a start pose, an optional seed and noise parameters.
-#ifndef IRSLAM_TESTS_SIM_WORLD_H_
-#define IRSLAM_TESTS_SIM_WORLD_H_
+#ifndef IRSLAM_SIM_WORLD_H_
+#define IRSLAM_SIM_WORLD_H_
 
 #include <optional>
 #include <string>
@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "types/geometry.h"
+#include "types/options.h"
 #include "types/signals.h"
 
 namespace irslam::sim {
@@ -34,7 +35,19 @@ struct SimNoise {
   double ir_period_s = 0.038;
   double ir_period_jitter_s = 0.004;
   double ir_beam_deg = 5.0;
+  // The realistic error envelope (issue 11; docs/robustness.md says where each
+  // magnitude comes from). The defaults switch every effect off.
+  double wheel_base_error = 0;       // relative error of the true track width
+  double slip_correlation_s = 0;     // > 0: slip is correlated over this time (carpet), not
+                                     // white per step, and grows with the turn rate
+  double ir_surface_bias_m = 0;      // each wall and face: a fixed range bias in +- this
+  double ir_max_incidence_deg = 90;  // returns beyond this incidence drop out; noise grows
+                                     // as 1/cos(incidence) below it (90: off)
+  double ir_outlier_rate = 0;        // this fraction of readings is a uniform random range
 };
+
+// The world file's "noise" keys (contracts.md §1 and §7), with bounds and docs.
+options::Table<SimNoise> SimNoiseKeys();
 
 struct World {
   std::string name;
@@ -50,17 +63,19 @@ struct World {
 };
 
 // Parses a world file's text; on error returns nullopt and a one-line *error
-// naming the field.
+// naming the field. Unknown keys are rejected by name (a typo such as "objcts"
+// must not give an empty room), and so are impossible worlds: a box outside the
+// room, a start pose outside the room or inside a box.
 std::optional<World> ParseWorld(std::string_view text, std::string* error);
 std::optional<World> LoadWorldFile(const std::string& path, std::string* error);
 
 // Ray cast: distance along the ray from p in direction angle to the nearest
-// segment, or nullopt within max_range.
+// segment, or nullopt within max_range; *hit gets that segment's index.
 std::optional<double> RayCast(const std::vector<Segment>& segs, Vec2 p, double angle,
-                              double max_range);
+                              double max_range, size_t* hit = nullptr);
 // Distance from a point to a segment.
 double PointSegmentDistance(Vec2 p, const Segment& s, Vec2* closest);
 
 }  // namespace irslam::sim
 
-#endif  // IRSLAM_TESTS_SIM_WORLD_H_
+#endif  // IRSLAM_SIM_WORLD_H_

@@ -11,7 +11,7 @@ cd "$root"
 # folder -> the project folders it may include (besides itself).
 declare -A allowed=(
   [types]=""
-  [io]=""
+  [io]="types"
   [proto]="types"
   [slam]="types"
   [control]="types slam"

@@ -4,6 +4,7 @@
 #   vcan-scripts/install-deps.sh          build + test dependencies
 #   vcan-scripts/install-deps.sh --vm     also what the VM test harness needs (qemu ...)
 #   vcan-scripts/install-deps.sh --fuzz   also clang + libFuzzer runtime
+#   vcan-scripts/install-deps.sh --package  also what building and checking the .deb needs
 set -euo pipefail
 
 pkgs=(cmake make g++ pkg-config
@@ -14,6 +15,7 @@ for arg in "$@"; do
   case "$arg" in
     --vm)   pkgs+=(qemu-system-x86 busybox-static cpio kmod gpiod) ;;
     --fuzz) pkgs+=(clang libclang-rt-14-dev) ;;
+    --package) pkgs+=(dpkg-dev lintian man-db) ;;
     *) echo "install-deps: unknown option '$arg'" >&2; exit 2 ;;
   esac
 done

@@ -763,11 +763,11 @@ TEST(CommandLineTest, BadConfigAndWorldFilesGiveOneLineAndStatus2) {
       {{kDaemon, "--can", "unix:" + dir + "/bus", "--config", dir + "/broken.conf"},
        "irslamd: " + dir + "/broken.conf: config: not valid JSON"},
       {{kDaemon, "--can", "unix:" + dir + "/bus", "--config", dir + "/missing.conf"},
-       "irslamd: config: cannot read " + dir + "/missing.conf\n"},
+       "irslamd: config: cannot read " + dir + "/missing.conf: No such file or directory\n"},
       {{kSim, "run", "--world", dir + "/bad_world.json"},
        "irslam-sim: " + dir + "/bad_world.json: world: \"start\" must be [x, y, theta]\n"},
       {{kSim, "run", "--world", dir + "/missing.json"},
-       "irslam-sim: world: cannot read " + dir + "/missing.json\n"},
+       "irslam-sim: world: cannot read " + dir + "/missing.json: No such file or directory\n"},
   };
   for (const auto& c : cases) {
     std::string out;

@@ -162,6 +162,7 @@ ObjectScores ScoreObjects(const nlohmann::json& map, const slam::Slam& slam,
   const Pose2 fixed = CorrectStart(world.start, BestAlignment(slam.lines(), world.start, world));
   const double rot = slam.map_rotation();
   int found = 0, kind_ok = 0, complete = 0, extra = 0;
+  int good = 0, good_complete = 0;
   double max_edge = 0, iou_sum = 0;
   std::vector<bool> matched(pieces.size(), false);
   for (const auto& o : map["objects"]) {
@@ -202,8 +203,13 @@ ObjectScores ScoreObjects(const nlohmann::json& map, const slam::Slam& slam,
     ++found;
     const bool wall = p.xmin < room.xmin + 0.05 || p.ymin < room.ymin + 0.05 ||
                       p.xmax > room.xmax - 0.05 || p.ymax > room.ymax - 0.05;
-    kind_ok += (o["kind"] == "wall_contact") == wall;
+    const bool kind_right = (o["kind"] == "wall_contact") == wall;
+    kind_ok += kind_right;
     complete += o["complete"].get<bool>();
+    if (kind_right && best_iou >= 0.5) {
+      ++good;
+      good_complete += o["complete"].get<bool>();
+    }
     // Edges: a wall-contact piece's wall side is never seen; skip it.
     const double e[4] = {p.xmin < room.xmin + 0.05 ? 0 : std::abs(x0 - p.xmin),
                          p.ymin < room.ymin + 0.05 ? 0 : std::abs(y0 - p.ymin),
@@ -218,6 +224,8 @@ ObjectScores ScoreObjects(const nlohmann::json& map, const slam::Slam& slam,
   sc.kind_right = kind_ok;
   sc.complete = complete;
   sc.extra = extra;
+  sc.good = good;
+  sc.good_complete = good_complete;
   sc.max_edge_m = max_edge;
   sc.mean_iou = found ? iou_sum / found : 0;
   return sc;

@@ -58,6 +58,8 @@ Pose2 CorrectStart(const Pose2& start, const Pose2& correction);
 // one compound piece; a piece touching a wall is wall-contact.
 struct ObjectScores {
   int pieces = 0, found = 0, kind_right = 0, complete = 0, extra = 0;
+  int good = 0;           // found with IoU >= 0.5 and the kind right (the campaign's measure)
+  int good_complete = 0;  // ... and marked complete
   double max_edge_m = 0;  // largest box-edge error over complete found pieces (wall sides excluded)
   double mean_iou = 0;
 };

@@ -11,6 +11,7 @@
 #include "robot/robot_core.h"
 #include "daemon/config.h"
 #include "sim/sim_run.h"
+#include "tests/tools/campaign.h"
 #include "tests/tools/metrics.h"
 #include "tests/tools/svg_chart.h"
 
@@ -102,6 +103,31 @@ bool Write(const std::string& path, const std::string& text) {
   return static_cast<bool>(out);
 }
 
+int RunCampaignReport(const robot::CoreOptions& options, const std::string& profiles, uint64_t first_seed,
+                      int runs, int jobs, const std::string& out_dir) {
+  std::vector<std::vector<campaign::RunScore>> by_profile;
+  std::stringstream list(profiles);
+  for (std::string name; std::getline(list, name, ',');) {
+    const auto profile = sim::ParseNoiseProfile(name);
+    if (!profile) {
+      std::fprintf(stderr, "irslam-report: unknown profile '%s' (nominal, realistic, harsh)\n", name.c_str());
+      return 2;
+    }
+    by_profile.push_back(campaign::RunCampaign(*profile, first_seed, runs, options, jobs));
+    const campaign::Rates r = campaign::Summarise(by_profile.back());
+    std::fprintf(stderr, "irslam-report: %s: %d runs, done %.1f %%, pieces good %.1f %%, complete %.1f %%, pose ok %.1f %%, lost %.1f %%, contacts/run %.2f\n",
+                 name.c_str(), r.runs, 100 * r.done, 100 * r.pieces_good, 100 * r.pieces_complete, 100 * r.pose_ok,
+                 100 * r.lost, r.furniture_contacts_per_run);
+  }
+  const std::string command = "irslam-report --campaign " + std::to_string(runs) + " --profiles " + profiles +
+                              " --first-seed " + std::to_string(first_seed);
+  if (!Write(out_dir + "/robustness.md", campaign::RobustnessReport(by_profile, out_dir, command))) {
+    std::fprintf(stderr, "irslam-report: cannot write %s/robustness.md\n", out_dir.c_str());
+    return 1;
+  }
+  return 0;
+}
+
 }  // namespace
 }  // namespace irslam::report
 
@@ -117,6 +143,16 @@ int main(int argc, char** argv) {
   app.add_option("--seeds", seeds, "Seeds per world")->check(CLI::Range(1, 100));
   std::string config_path;
   app.add_option("--config", config_path, "irslamd config file to evaluate (default: built-in defaults)");
+  int campaign_runs = 0, jobs = 2;
+  uint64_t first_seed = 1;
+  std::string profiles = "nominal,realistic,harsh";
+  app.add_option("--campaign", campaign_runs,
+                 "Instead of the accuracy report: the robustness campaign over this many generated worlds per "
+                 "profile (robustness.md in --out)")
+      ->check(CLI::Range(1, 100000));
+  app.add_option("--profiles", profiles, "Campaign noise profiles, comma-separated (nominal,realistic,harsh)");
+  app.add_option("--first-seed", first_seed, "Campaign: the first world seed");
+  app.add_option("--jobs", jobs, "Campaign: runs in parallel")->check(CLI::Range(1, 64));
   CLI11_PARSE(app, argc, argv);
   robot::CoreOptions defaults = robot::DefaultCoreOptions();
   if (!config_path.empty()) {
@@ -126,6 +162,8 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+
+  if (campaign_runs > 0) return RunCampaignReport(defaults, profiles, first_seed, campaign_runs, jobs, out_dir);
 
   const auto load = [&](const std::string& name) {
     std::string error;

@@ -8,8 +8,7 @@ namespace {
 TEST(WorldTest, ParsesTheContractExample) {
   std::string error;
   auto w = ParseWorld(R"({"name": "paper-fig14", "room": [4.0, 5.5],
-      "objects": [[0.0, 2.0, 0.6, 3.2], [1.4, 1.2, 2.2, 1.8]], "start": [2.0, 0.8, 1.0],
-      "future_key": 1})", &error);
+      "objects": [[0.0, 2.0, 0.6, 3.2], [1.4, 1.2, 2.2, 1.8]], "start": [2.0, 0.8, 1.0]})", &error);
   ASSERT_TRUE(w) << error;
   EXPECT_EQ(w->name, "paper-fig14");
   EXPECT_EQ(w->outline.size(), 4u);
@@ -39,6 +38,14 @@ TEST(WorldTest, MalformedFilesNameTheField) {
       {R"({"room": [4,4], "start": [1,1,0], "seed": "x"})", "\"seed\""},
       {R"({"room": [4,4], "start": [1,1,0], "noise": {"slip_sigma": -1}})", "noise.slip_sigma"},
       {R"({"outline": [[0,0],[3,1],[3,3],[0,3]], "start": [1,1,0]})", "not axis-aligned"},
+      // Issue 12 / contracts §1 (2026-12): unknown keys are rejected by name, and
+      // impossible worlds are errors (a typo such as "objcts" gave an empty room).
+      {R"({"room": [4,4], "start": [1,1,0], "objcts": [[2,2,3,3]]})", "\"objcts\" is not a known key"},
+      {R"({"room": [4,4], "start": [1,1,0], "noise": {"slip": 0.1}})", "noise.slip is not a known key"},
+      {R"({"room": [4,4], "start": [1,1,0], "objects": [[3,3,5,5]]})", "\"objects\"[0] lies outside the room"},
+      {R"({"room": [4,4], "start": [2.5,2.5,0], "objects": [[2,2,3,3]]})", "\"start\" lies inside \"objects\"[0]"},
+      {R"({"outline": [[0,0],[3,0],[3,2],[2,2],[2,3],[0,3]], "start": [1,1,0], "objects": [[2.2,2.2,2.8,2.8]]})",
+       "\"objects\"[0] lies outside the room"},
   };
   for (const auto& [text, field] : cases) {
     std::string error;

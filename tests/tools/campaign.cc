@@ -1,0 +1,261 @@
+#include "tests/tools/campaign.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <thread>
+
+#include "sim/sim_run.h"
+#include "tests/tools/metrics.h"
+#include "tests/tools/svg_chart.h"
+
+namespace irslam::campaign {
+namespace {
+
+constexpr double kDeg = 180.0 / M_PI;
+constexpr double kClutterM = 0.06;  // legs and posts: not furniture the model must find
+
+bool IsClutter(const sim::Box& b) { return b.xmax - b.xmin <= kClutterM + 1e-9 && b.ymax - b.ymin <= kClutterM + 1e-9; }
+
+std::vector<TimedPose> FromJson(const nlohmann::json& arr) {
+  std::vector<TimedPose> out;
+  for (const auto& p : arr) out.push_back({p[0], {p[1], p[2], p[3]}});
+  return out;
+}
+
+// Contacts by what the robot touched: the nearest wall or box to the robot's
+// centre at the contact.
+void ClassifyContacts(const sim::World& world, const std::vector<std::array<double, 3>>& points, RunScore* s) {
+  for (const auto& c : points) {
+    double best = 1e9;
+    bool clutter = false;
+    for (const sim::Box& b : world.objects) {
+      const double dx = std::max({b.xmin - c[1], 0.0, c[1] - b.xmax});
+      const double dy = std::max({b.ymin - c[2], 0.0, c[2] - b.ymax});
+      const double d = std::hypot(dx, dy);
+      if (d < best) best = d, clutter = IsClutter(b);
+    }
+    const sim::Box r = world.Bounds();
+    const double wall = std::min({c[1] - r.xmin, r.xmax - c[1], c[2] - r.ymin, r.ymax - c[2]});
+    if (wall < best) clutter = false;
+    ++(clutter ? s->contacts_clutter : s->contacts_furniture);
+  }
+}
+
+void Classify(double max_time_s, RunScore* s) {
+  if (!s->done) {
+    if (s->robot_time_s >= max_time_s - 1) {
+      if (s->end_state == "wall_follow") {
+        s->failures.push_back("time limit: circling the room (loop never closed)");
+      } else if (s->end_state == "contour_follow") {
+        s->failures.push_back("time limit: circling an object");
+      } else {
+        s->failures.push_back("time limit: " + s->end_state);
+      }
+    } else {
+      s->failures.push_back("ended " + s->end_state);
+    }
+  }
+  if (s->max_position_m > 0.20) s->failures.push_back("lost (pose error > 20 cm)");
+  if (s->good < s->pieces) s->failures.push_back("piece missed or kind wrong");
+  if (s->complete < s->good) s->failures.push_back("incomplete");
+  if (s->contacts_furniture > 0) s->failures.push_back("contact");
+}
+
+std::string F(double v, int prec = 1) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.*f", prec, v);
+  return b;
+}
+
+std::string Pct(double f) { return F(100 * f, 1) + " %"; }
+
+// A histogram as a step line (for svg_chart's line chart).
+report::Series Histogram(const std::string& name, const std::string& color, const std::vector<double>& values,
+                         double lo, double hi, int bins) {
+  std::vector<int> count(static_cast<size_t>(bins), 0);
+  for (double v : values) {
+    const int k = std::clamp(static_cast<int>((v - lo) / (hi - lo) * bins), 0, bins - 1);
+    ++count[static_cast<size_t>(k)];
+  }
+  report::Series s{name, color, {}};
+  for (int k = 0; k < bins; ++k) {
+    const double x0 = lo + (hi - lo) * k / bins, x1 = lo + (hi - lo) * (k + 1) / bins;
+    s.points.emplace_back(x0, count[static_cast<size_t>(k)]);
+    s.points.emplace_back(x1, count[static_cast<size_t>(k)]);
+  }
+  return s;
+}
+
+}  // namespace
+
+RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::CoreOptions& options,
+                     double max_time_s) {
+  const sim::World world = sim::GenerateWorld(seed, profile);
+  RunScore s;
+  s.seed = seed;
+  s.profile = profile;
+  s.world = world.name;
+  sim::InProcessRun run = sim::RunInProcess(world, options, seed, max_time_s);
+  s.done = run.core->state() == control::MissionState::kDone;
+  s.end_state = control::ToString(run.core->state());
+  s.robot_time_s = run.t;
+  const nlohmann::json truth = run.sim->Truth();
+  const auto est = metrics::ToWorld(run.core->slam().trajectory(), world.start);
+  const auto errors = metrics::ComparePoses(est, FromJson(truth["trajectory"]));
+  s.final_position_m = errors.final_position_m;
+  s.final_heading_rad = errors.final_heading_rad;
+  s.rms_position_m = errors.rms_position_m;
+  s.max_position_m = errors.max_position_m;
+  s.odom_final_position_m = metrics::ComparePoses(FromJson(truth["odometry"]), FromJson(truth["trajectory"])).final_position_m;
+  sim::World furniture = world;
+  furniture.objects.erase(std::remove_if(furniture.objects.begin(), furniture.objects.end(), IsClutter),
+                          furniture.objects.end());
+  const metrics::ObjectScores objects = metrics::ScoreObjects(run.core->Map(), run.core->slam(), furniture);
+  s.pieces = objects.pieces;
+  s.good = objects.good;
+  s.complete = objects.good_complete;
+  s.extra = objects.extra;
+  s.max_edge_m = objects.max_edge_m;
+  ClassifyContacts(world, run.sim->collision_points(), &s);
+  Classify(max_time_s, &s);
+  return s;
+}
+
+std::vector<RunScore> RunCampaign(sim::NoiseProfile profile, uint64_t first_seed, int count,
+                                  const robot::CoreOptions& options, int jobs) {
+  std::vector<RunScore> out(static_cast<size_t>(std::max(0, count)));
+  std::atomic<int> next{0};
+  const auto work = [&] {
+    for (int i = next++; i < count; i = next++) {
+      out[static_cast<size_t>(i)] = RunAndScore(first_seed + static_cast<uint64_t>(i), profile, options,
+                                                options.mission.max_time_s);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 0; j < std::max(1, jobs); ++j) threads.emplace_back(work);
+  for (auto& t : threads) t.join();
+  return out;
+}
+
+Rates Summarise(const std::vector<RunScore>& runs) {
+  Rates r;
+  r.runs = static_cast<int>(runs.size());
+  if (runs.empty()) return r;
+  int pieces = 0, good = 0, complete = 0, contacts = 0;
+  for (const auto& s : runs) {
+    r.done += s.done;
+    pieces += s.pieces, good += s.good, complete += s.complete, contacts += s.contacts_furniture;
+    r.pose_ok += s.final_position_m <= 0.05 && std::abs(s.final_heading_rad) <= 2 / kDeg;
+    r.lost += s.max_position_m > 0.20;
+  }
+  const double n = static_cast<double>(runs.size());
+  r.done /= n, r.pose_ok /= n, r.lost /= n;
+  r.pieces_good = pieces ? static_cast<double>(good) / pieces : 1.0;
+  r.pieces_complete = pieces ? static_cast<double>(complete) / pieces : 1.0;
+  r.furniture_contacts_per_run = contacts / n;
+  return r;
+}
+
+std::string RobustnessReport(const std::vector<std::vector<RunScore>>& by_profile, const std::string& out_dir,
+                             const std::string& command) {
+  std::ostringstream md;
+  md << "# Robustness over generated worlds\n\n"
+     << "Generated by `" << command << "`: every world is `irslam-sim generate --seed N --profile P` "
+        "(sim/generator.h: rooms 3 x 3 to 8 x 7 m, 0-6 pieces of furniture of every kind, clutter, narrow gaps, "
+        "a free start with any heading), run through the whole mission in process with the default "
+        "configuration and the 900 s time limit, and scored against the simulator's truth. *Pieces*: touching "
+        "boxes form one piece; legs and posts (<= 6 cm) are clutter, not pieces. *Good*: found with IoU >= 0.5 "
+        "and the kind right. *Pose ok*: final position error <= 5 cm and heading <= 2 deg. *Lost*: the position "
+        "error exceeded 20 cm at some time. Contacts: with walls or furniture (clutter counted apart).\n\n";
+  struct Target {
+    const char* name;
+    double nominal, realistic, harsh;  // < 0: no target
+    bool at_most;
+  };
+  const Target targets[] = {{"mission `done` within the time limit", 0.99, 0.98, 0.90, false},
+                            {"pieces found (IoU >= 0.5), kind right", 0.98, 0.95, 0.85, false},
+                            {"pieces complete", 0.95, 0.90, -1, false},
+                            {"final position <= 5 cm and heading <= 2 deg", 0.95, 0.90, 0.75, false},
+                            {"runs lost (pose error ever > 20 cm)", 0.0, 0.01, 0.05, true},
+                            {"contacts with furniture (not clutter) per run", 0.05, 0.1, -1, true}};
+  md << "## Rates against the targets (issue 11)\n\n| | ";
+  for (const auto& runs : by_profile) md << (runs.empty() ? "?" : sim::ToString(runs[0].profile)) << " (" << runs.size() << " runs) | target | ";
+  md << "\n|---|";
+  for (size_t i = 0; i < by_profile.size(); ++i) md << "---|---|";
+  md << "\n";
+  for (size_t t = 0; t < std::size(targets); ++t) {
+    md << "| " << targets[t].name << " | ";
+    for (const auto& runs : by_profile) {
+      const Rates r = Summarise(runs);
+      const double v[] = {r.done, r.pieces_good, r.pieces_complete, r.pose_ok, r.lost, r.furniture_contacts_per_run};
+      const sim::NoiseProfile p = runs.empty() ? sim::NoiseProfile::kNominal : runs[0].profile;
+      const double target = p == sim::NoiseProfile::kNominal     ? targets[t].nominal
+                            : p == sim::NoiseProfile::kRealistic ? targets[t].realistic
+                                                                 : targets[t].harsh;
+      const bool met = target < 0 || (targets[t].at_most ? v[t] <= target + 1e-12 : v[t] >= target - 1e-12);
+      const std::string value = t == 5 ? F(v[t], 2) : Pct(v[t]);
+      md << (met ? value : "**" + value + "**") << " | "
+         << (target < 0 ? "–" : (targets[t].at_most ? "<= " : ">= ") + (t == 5 ? F(target, 2) : Pct(target)))
+         << " | ";
+    }
+    md << "\n";
+  }
+  md << "\nBold: the target is not met.\n\n## Failure classes\n\nA run can have several.\n\n| class |";
+  for (const auto& runs : by_profile) md << " " << (runs.empty() ? "?" : sim::ToString(runs[0].profile)) << " |";
+  md << "\n|---|";
+  for (size_t i = 0; i < by_profile.size(); ++i) md << "---|";
+  md << "\n";
+  std::map<std::string, std::vector<int>> classes;
+  for (size_t p = 0; p < by_profile.size(); ++p) {
+    for (const auto& s : by_profile[p]) {
+      for (const auto& f : s.failures) {
+        auto& v = classes[f];
+        v.resize(by_profile.size(), 0);
+        ++v[p];
+      }
+    }
+  }
+  for (const auto& [name, counts] : classes) {
+    md << "| " << name << " |";
+    for (int c : counts) md << " " << c << " |";
+    md << "\n";
+  }
+  // Histograms.
+  const char* colors[] = {"#1f77b4", "#ff7f0e", "#d62728"};
+  std::vector<report::Series> pos, time;
+  for (size_t p = 0; p < by_profile.size(); ++p) {
+    std::vector<double> e, t;
+    for (const auto& s : by_profile[p]) e.push_back(std::min(100 * s.final_position_m, 49.9)), t.push_back(s.robot_time_s);
+    const std::string name = by_profile[p].empty() ? "?" : sim::ToString(by_profile[p][0].profile);
+    pos.push_back(Histogram(name, colors[p % 3], e, 0, 50, 25));
+    time.push_back(Histogram(name, colors[p % 3], t, 0, 900, 18));
+  }
+  std::ofstream(out_dir + "/robustness_final_error.svg")
+      << report::LineChart("Final position error (runs per 2 cm bin; 50 cm and more in the last)", "cm", "runs", pos);
+  std::ofstream(out_dir + "/robustness_robot_time.svg")
+      << report::LineChart("Robot time of the mission (runs per 50 s bin)", "s", "runs", time);
+  md << "\n![final position error](robustness_final_error.svg)\n\n![robot time](robustness_robot_time.svg)\n\n";
+  md << "## Every failing run, and how to reproduce it\n\n"
+     << "| profile | seed | world | end | robot time s | pieces good/complete/all | final cm | max cm | contacts "
+        "(furniture/clutter) | failures | reproduce |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& runs : by_profile) {
+    for (const auto& s : runs) {
+      if (s.failures.empty()) continue;
+      std::string f;
+      for (const auto& x : s.failures) f += (f.empty() ? "" : "; ") + x;
+      md << "| " << sim::ToString(s.profile) << " | " << s.seed << " | " << s.world << " | " << s.end_state << " | "
+         << F(s.robot_time_s) << " | " << s.good << "/" << s.complete << "/" << s.pieces << " | "
+         << F(100 * s.final_position_m) << " | " << F(100 * s.max_position_m) << " | " << s.contacts_furniture << "/"
+         << s.contacts_clutter << " | " << f << " | `irslam-sim generate --seed " << s.seed << " --profile "
+         << sim::ToString(s.profile) << " --out w.json && irslam-sim run --world w.json` |\n";
+    }
+  }
+  return md.str();
+}
+
+}  // namespace irslam::campaign

@@ -1,0 +1,59 @@
+// The random-world campaign (issue 11): generated worlds (sim/generator.h) run
+// through the whole mission in process, every run scored against the simulator's
+// truth and every failure classified, so robustness is a measured property of the
+// distribution of rooms and robots, not of eight hand-made worlds.
+#ifndef IRSLAM_TESTS_TOOLS_CAMPAIGN_H_
+#define IRSLAM_TESTS_TOOLS_CAMPAIGN_H_
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "robot/robot_core.h"
+#include "sim/generator.h"
+
+namespace irslam::campaign {
+
+struct RunScore {
+  uint64_t seed = 0;
+  sim::NoiseProfile profile = sim::NoiseProfile::kNominal;
+  std::string world;             // its name
+  bool done = false;             // the mission ended `done` within the time limit
+  std::string end_state;         // the state at the end
+  double robot_time_s = 0;
+  int pieces = 0;                // true furniture pieces (touching boxes are one; clutter not counted)
+  int good = 0;                  // ... found with IoU >= 0.5 and the kind right
+  int complete = 0;              // ... of those, marked complete
+  int extra = 0;                 // mapped objects matching no true piece
+  double max_edge_m = 0;         // largest box-edge error over complete pieces
+  double final_position_m = 0, final_heading_rad = 0, rms_position_m = 0, max_position_m = 0;
+  double odom_final_position_m = 0;
+  int contacts_furniture = 0;    // contacts with walls or furniture
+  int contacts_clutter = 0;      // contacts with legs and posts (<= 6 cm)
+  std::vector<std::string> failures;  // the failure classes of this run (empty: a good run)
+};
+
+// One generated world, run and scored. max_time_s: the mission's time limit.
+RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::CoreOptions& options,
+                     double max_time_s);
+
+// Seeds first_seed .. first_seed + count - 1 of one profile on `jobs` threads
+// (the core has no global state); results in seed order.
+std::vector<RunScore> RunCampaign(sim::NoiseProfile profile, uint64_t first_seed, int count,
+                                  const robot::CoreOptions& options, int jobs);
+
+// The rates the targets are stated in (fractions; contacts per run).
+struct Rates {
+  int runs = 0;
+  double done = 0, pieces_good = 0, pieces_complete = 0, pose_ok = 0, lost = 0;
+  double furniture_contacts_per_run = 0;
+};
+Rates Summarise(const std::vector<RunScore>& runs);
+
+// docs/robustness.md (and its SVG histograms, written beside it).
+std::string RobustnessReport(const std::vector<std::vector<RunScore>>& by_profile, const std::string& out_dir,
+                             const std::string& command);
+
+}  // namespace irslam::campaign
+
+#endif  // IRSLAM_TESTS_TOOLS_CAMPAIGN_H_
