@@ -160,7 +160,9 @@ TEST(LineEkfTest, InPlaceUpdateMatchesTheReference) {
   };
   // A wall at distance 0.5..4 m, parallel or orthogonal to the first.
   const auto add_line = [&] {
-    const LineObservation z{0.5 + 3.5 * uni(rng), NormalizeAngle(-fast.pose().theta + M_PI / 2 * std::floor(4 * uni(rng)) + 0.01 * noise(rng))};
+    const double rho = 0.5 + 3.5 * uni(rng);
+    const double wall = M_PI / 2 * std::floor(4 * uni(rng)) + 0.01 * noise(rng);
+    const LineObservation z{rho, NormalizeAngle(wall - fast.pose().theta)};
     fast.AddLine(z, r_obs);
     ref.AddLine(z, r_obs);
     compare();
