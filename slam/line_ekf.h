@@ -7,7 +7,8 @@
 // Update cost: a measurement touches only the robot pose, the observed line and the
 // lines of its pseudo-measurements (eqs. 11-12): H has at most ~9 non-zero columns.
 // Update works from those columns and writes P in place (no n x n temporaries):
-// O(n m) for P H', then one symmetric rank-2m update of P's lower triangle.
+// O(n m) for P H', then one symmetric rank-2m update of P (the Joseph form
+// regrouped; lower triangle computed, mirrored panel by panel).
 #ifndef IRSLAM_SLAM_LINE_EKF_H_
 #define IRSLAM_SLAM_LINE_EKF_H_
 
