@@ -1,6 +1,7 @@
 #include "slam/line_ekf.h"
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 
 #include "slam/line_extraction.h"
@@ -109,7 +110,76 @@ void LineEkf::RemoveLine(int i) {
   P_ = std::move(p);
 }
 
+void LineEkf::FindColumns(const Eigen::MatrixXd& h) {
+  cols_.clear();
+  for (long j = 0; j < h.cols(); ++j) {
+    if ((h.col(j).array() != 0).any()) cols_.push_back(static_cast<int>(j));
+  }
+  hc_.resize(h.rows(), static_cast<long>(cols_.size()));
+  for (size_t j = 0; j < cols_.size(); ++j) hc_.col(static_cast<long>(j)) = h.col(cols_[j]);
+}
+
 void LineEkf::Update(const Eigen::VectorXd& y, const Eigen::MatrixXd& h, const Eigen::MatrixXd& r) {
+  FindColumns(h);
+  UpdateColumns(y, cols_, hc_, r);
+}
+
+Eigen::MatrixXd LineEkf::ProjectedCov(const Eigen::MatrixXd& h) const {
+  std::vector<long> cols;
+  for (long j = 0; j < h.cols(); ++j) {
+    if ((h.col(j).array() != 0).any()) cols.push_back(j);
+  }
+  const long c = static_cast<long>(cols.size());
+  Eigen::MatrixXd hc(h.rows(), c), pc(c, c);
+  for (long a = 0; a < c; ++a) {
+    hc.col(a) = h.col(cols[static_cast<size_t>(a)]);
+    for (long b = 0; b < c; ++b) pc(a, b) = P_(cols[static_cast<size_t>(a)], cols[static_cast<size_t>(b)]);
+  }
+  return hc * pc * hc.transpose();
+}
+
+void LineEkf::UpdateColumns(const Eigen::VectorXd& y, const std::vector<int>& cols, const Eigen::MatrixXd& hc,
+                            const Eigen::MatrixXd& r) {
+  const long n = x_.size(), m = y.size();
+  // P H' (n x m) from H's non-zero columns only: sum over them of P(:, j) H(:, j)'.
+  pht_.setZero(n, m);
+  for (size_t j = 0; j < cols.size(); ++j) {
+    pht_.noalias() += P_.col(cols[j]) * hc.col(static_cast<long>(j)).transpose();
+  }
+  // S = H P H' + R (m x m): H times the rows of P H' at H's columns.
+  Eigen::MatrixXd s = r;
+  for (size_t j = 0; j < cols.size(); ++j) s.noalias() += hc.col(static_cast<long>(j)) * pht_.row(cols[j]);
+  // ku_ = [K U], uk_ = [U K] with the gain K = P H' S^-1 and U = P H' - K S / 2.
+  ku_.resize(n, 2 * m);
+  uk_.resize(n, 2 * m);
+  auto k = ku_.leftCols(m);
+  auto u = ku_.rightCols(m);
+  k.noalias() = pht_ * s.inverse();
+  x_.noalias() += k * y;
+  x_(2) = NormalizeAngle(x_(2));
+  u = pht_;
+  u.noalias() -= 0.5 * k * s;
+  uk_.leftCols(m) = u;
+  uk_.rightCols(m) = k;
+  // Joseph form, exactly: (I-KH) P (I-KH)' + K R K' = P - K H P - P H' K' + K S K'
+  //                                                 = P - (K U' + U K').
+  // A symmetric rank-2m update of P in place: the lower triangle is computed one
+  // panel of kPanel columns at a time, and each panel is mirrored into the upper
+  // triangle right after (a final mirror of the whole lower triangle reads P across
+  // its rows, a TLB page per element, and costs more than the update at 1,000
+  // lines). No n x n temporary; P stays exactly symmetric.
+  constexpr long kPanel = 64;
+  for (long jb = 0; jb < n; jb += kPanel) {
+    const long b = std::min(kPanel, n - jb), rest = n - jb - b;
+    P_.block(jb, jb, n - jb, b).noalias() -= ku_.bottomRows(n - jb) * uk_.middleRows(jb, b).transpose();
+    auto diagonal = P_.block(jb, jb, b, b);
+    diagonal.triangularView<Eigen::StrictlyUpper>() = diagonal.transpose();
+    if (rest > 0) P_.block(jb, jb + b, b, rest) = P_.block(jb + b, jb, rest, b).transpose();
+  }
+  NormalizeAllLines();
+}
+
+void LineEkf::UpdateReference(const Eigen::VectorXd& y, const Eigen::MatrixXd& h, const Eigen::MatrixXd& r) {
   const Eigen::MatrixXd pht = P_ * h.transpose();           // n x m
   const Eigen::MatrixXd s = h * pht + r;                     // m x m
   const Eigen::MatrixXd k = pht * s.inverse();               // n x m
@@ -119,6 +189,10 @@ void LineEkf::Update(const Eigen::VectorXd& y, const Eigen::MatrixXd& h, const E
   const Eigen::MatrixXd a = P_ - k * pht.transpose();
   P_ = a - (a * h.transpose()) * k.transpose() + k * r * k.transpose();
   P_ = 0.5 * (P_ + P_.transpose()).eval();
+  NormalizeAllLines();
+}
+
+void LineEkf::NormalizeAllLines() {
   for (int i = 0; i < num_lines(); ++i) NormalizeLineState(i);
 }
 

@@ -3,10 +3,17 @@
 // Models are free functions (tested against finite differences); LineEkf holds
 // the state and applies prediction, measurement and pseudo-measurement updates
 // (Joseph form), landmark insertion (inverse model) and deletion.
+//
+// Update cost: a measurement touches only the robot pose, the observed line and the
+// lines of its pseudo-measurements (eqs. 11-12): H has at most ~9 non-zero columns.
+// Update works from those columns and writes P in place (no n x n temporaries):
+// O(n m) for P H', then one symmetric rank-2m update of P (the Joseph form
+// regrouped; lower triangle computed, mirrored panel by panel).
 #ifndef IRSLAM_SLAM_LINE_EKF_H_
 #define IRSLAM_SLAM_LINE_EKF_H_
 
 #include <Eigen/Core>
+#include <vector>
 
 #include "slam/odometry.h"
 #include "types/geometry.h"
@@ -54,8 +61,20 @@ class LineEkf {
   void RemoveLine(int i);
 
   // One stacked update: innovation y (already angle-wrapped), Jacobian H (m x n)
-  // and noise R. Joseph form: P = (I-KH) P (I-KH)' + K R K'.
+  // and noise R. Joseph form: P = (I-KH) P (I-KH)' + K R K', computed in place from
+  // H's non-zero columns (found by a scan of H).
   void Update(const Eigen::VectorXd& y, const Eigen::MatrixXd& h, const Eigen::MatrixXd& r);
+  // The same with H given by its non-zero columns: H(:, cols[j]) = hc.col(j), all
+  // other columns zero (cols distinct, each in [0, n)).
+  void UpdateColumns(const Eigen::VectorXd& y, const std::vector<int>& cols, const Eigen::MatrixXd& hc,
+                     const Eigen::MatrixXd& r);
+  // H P H' (m x m) from H's non-zero columns only, e.g. for an innovation gate.
+  Eigen::MatrixXd ProjectedCov(const Eigen::MatrixXd& h) const;
+
+  // The former dense update (same Joseph form, O(n^2 m) with several n x n
+  // temporaries). Not used by Slam: kept to check Update against it (the test
+  // InPlaceUpdateMatchesTheReference) and to benchmark both (tests/bench/ekf_bench.cc).
+  void UpdateReference(const Eigen::VectorXd& y, const Eigen::MatrixXd& h, const Eigen::MatrixXd& r);
 
   // Puts line i back to rho >= 0, theta in (-pi, pi] (flipping its covariance rows).
   void NormalizeLineState(int i);
@@ -64,8 +83,15 @@ class LineEkf {
   Eigen::MatrixXd& mutable_P() { return P_; }
 
  private:
+  // H's non-zero columns and their values, found by a scan of dense H.
+  void FindColumns(const Eigen::MatrixXd& h);
+  void NormalizeAllLines();
+
   Eigen::VectorXd x_;
   Eigen::MatrixXd P_;
+  // Update's workspace (kept to avoid allocating while the state size is unchanged).
+  std::vector<int> cols_;
+  Eigen::MatrixXd hc_, pht_, ku_, uk_;
 };
 
 }  // namespace irslam::slam

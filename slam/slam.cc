@@ -348,7 +348,8 @@ void Slam::Associate(const ExtractedLine& obs) {
     Eigen::MatrixXd hm(2, n);
     hm.row(0) = rows[0];
     hm.row(1) = rows[1];
-    const Eigen::Matrix2d s = hm * ekf_.P() * hm.transpose() + obs.cov * ao.measurement_cov_scale;
+    // H P H' from H's non-zero columns (not a pass over the whole of P).
+    const Eigen::Matrix2d s = ekf_.ProjectedCov(hm) + obs.cov * ao.measurement_cov_scale;
     const Eigen::Vector2d yy(y[0], y[1]);
     if (yy.dot(s.inverse() * yy) > ao.max_mahalanobis2) {
       ++stats_.rejected_gate;

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <cstdio>
 #include <random>
 
 #include "slam/line_ekf.h"
@@ -102,6 +103,159 @@ TEST(LineEkfTest, RemoveLineDeletesExactlyItsRowsAndColumns) {
   EXPECT_DOUBLE_EQ(ekf.P()(5, 5), 100 * 7 + 7);  // old (7,7)
   EXPECT_DOUBLE_EQ(ekf.P()(3, 6), 100 * 3 + 8);  // old (3,8)
   EXPECT_DOUBLE_EQ(ekf.P()(6, 0), 100 * 8 + 0);
+}
+
+// Two filters fed the same sequence as Slam feeds its filter: the first wall
+// pinned (R = 1e-12), insertions with their eq. (11)/(12) constraint rows,
+// matched observations (eq. 10 + constraints, m = 2..5), zero-noise merges
+// (R = 1e-8) followed by RemoveLine, odometry in between. One filter uses the
+// in-place Update, the other the former dense UpdateReference.
+TEST(LineEkfTest, InPlaceUpdateMatchesTheReference) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uni(0, 1);
+  std::normal_distribution<double> noise(0, 1);
+  LineEkf fast, ref;
+  const Eigen::Matrix2d r_obs = (Eigen::Matrix2d() << 1e-4, 0, 0, 1e-3).finished();
+  double max_dx = 0, max_dp = 0, max_asym = 0;
+  int updates = 0, merges = 0, max_lines = 0, constraint_rows = 0;
+  const auto compare = [&] {
+    ASSERT_EQ(fast.x().size(), ref.x().size());
+    max_dx = std::max(max_dx, (fast.x() - ref.x()).cwiseAbs().maxCoeff());
+    max_dp = std::max(max_dp, (fast.P() - ref.P()).cwiseAbs().maxCoeff());
+    max_lines = std::max(max_lines, fast.num_lines());
+  };
+  const auto update = [&](const Eigen::VectorXd& y, const Eigen::MatrixXd& h, const Eigen::MatrixXd& r) {
+    fast.Update(y, h, r);
+    ref.UpdateReference(y, h, r);
+    ++updates;
+    compare();
+    max_asym = std::max(max_asym, (fast.P() - fast.P().transpose()).cwiseAbs().maxCoeff());
+  };
+  // Rows of eq. (11) (theta_i against theta_0) and, with a partner, eq. (12).
+  const auto constraint_rows_for = [&](int i, int partner, Eigen::MatrixXd* h, Eigen::VectorXd* y,
+                                       Eigen::MatrixXd* r) {
+    const long n = fast.x().size(), m0 = h->rows();
+    const long extra = partner >= 0 ? 3 : 1;
+    h->conservativeResize(m0 + extra, n);
+    h->bottomRows(extra).setZero();
+    y->conservativeResize(m0 + extra);
+    r->conservativeResize(m0 + extra, m0 + extra);
+    r->bottomRows(extra).setZero();
+    r->rightCols(extra).setZero();
+    (*h)(m0, 4 + 2 * i) = 1;
+    (*h)(m0, 4) = -1;
+    (*y)(m0) = -AngleModHalfPi(fast.theta(i) - fast.theta(0));
+    (*r)(m0, m0) = 1e-6;
+    if (partner >= 0) {
+      (*h)(m0 + 1, 3 + 2 * i) = 1;
+      (*h)(m0 + 1, 3 + 2 * partner) = -1;
+      (*h)(m0 + 2, 4 + 2 * i) = 1;
+      (*h)(m0 + 2, 4 + 2 * partner) = -1;
+      (*y)(m0 + 1) = -(fast.rho(i) - fast.rho(partner));
+      (*y)(m0 + 2) = -NormalizeAngle(fast.theta(i) - fast.theta(partner));
+      (*r)(m0 + 1, m0 + 1) = 1e-6;
+      (*r)(m0 + 2, m0 + 2) = 1e-6;
+    }
+    constraint_rows += static_cast<int>(extra);
+  };
+  // A wall at distance 0.5..4 m, parallel or orthogonal to the first.
+  const auto add_line = [&] {
+    const double rho = 0.5 + 3.5 * uni(rng);
+    const double wall = M_PI / 2 * std::floor(4 * uni(rng)) + 0.01 * noise(rng);
+    const LineObservation z{rho, NormalizeAngle(wall - fast.pose().theta)};
+    fast.AddLine(z, r_obs);
+    ref.AddLine(z, r_obs);
+    compare();
+  };
+  add_line();
+  {
+    Eigen::MatrixXd h = Eigen::MatrixXd::Zero(1, fast.x().size());
+    h(0, 4) = 1;
+    update(Eigen::VectorXd::Zero(1), h, Eigen::MatrixXd::Constant(1, 1, 1e-12));
+  }
+  for (int step = 0; step < 400; ++step) {
+    const Motion motion{0.05 + 0.1 * uni(rng), 0.2 * noise(rng)};
+    fast.Predict(motion, MotionNoise{});
+    ref.Predict(motion, MotionNoise{});
+    compare();
+    const double u = uni(rng);
+    const int lines = fast.num_lines();
+    if (u < 0.15 || lines < 4) {  // insertion, sometimes a collinear piece
+      const int partner = lines > 1 && uni(rng) < 0.3 ? 1 + static_cast<int>(uni(rng) * (lines - 1)) : -1;
+      add_line();
+      Eigen::MatrixXd h(0, fast.x().size()), r(0, 0);
+      Eigen::VectorXd y(0);
+      constraint_rows_for(fast.num_lines() - 1, partner, &h, &y, &r);
+      update(y, h, r);
+    } else if (u < 0.2 && lines > 4) {  // merge line k into line i, then delete k
+      const int i = static_cast<int>(uni(rng) * (lines - 1));
+      const int k = i + 1 + static_cast<int>(uni(rng) * (lines - 1 - i));
+      Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2, fast.x().size());
+      h(0, 3 + 2 * i) = 1;
+      h(0, 3 + 2 * k) = -1;
+      h(1, 4 + 2 * i) = 1;
+      h(1, 4 + 2 * k) = -1;
+      Eigen::VectorXd y(2);
+      y << -0.02 * noise(rng), -0.01 * noise(rng);
+      update(y, h, Eigen::MatrixXd::Identity(2, 2) * 1e-8);
+      fast.RemoveLine(k);
+      ref.RemoveLine(k);
+      ++merges;
+      compare();
+    } else {  // a matched observation of line b (eq. 10) with its constraints
+      const int b = static_cast<int>(uni(rng) * lines);
+      Eigen::Matrix<double, 2, 5> j;
+      PredictObservation(fast.pose(), fast.rho(b), fast.theta(b), &j);
+      Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2, fast.x().size());
+      h.leftCols<3>() = j.leftCols<3>();
+      h.middleCols<2>(3 + 2 * b) = j.rightCols<2>();
+      Eigen::VectorXd y(2);
+      y << 0.01 * noise(rng), 0.03 * noise(rng);
+      Eigen::MatrixXd r = r_obs;
+      if (b > 0) {
+        const int partner = uni(rng) < 0.3 && b > 1 ? static_cast<int>(uni(rng) * b) : -1;
+        constraint_rows_for(b, partner > 0 ? partner : -1, &h, &y, &r);
+      }
+      update(y, h, r);
+    }
+  }
+  EXPECT_GE(updates, 350);
+  EXPECT_GE(merges, 5);
+  EXPECT_GE(max_lines, 30);
+  EXPECT_GE(constraint_rows, 300);
+  EXPECT_LT(max_dx, 1e-9);
+  EXPECT_LT(max_dp, 1e-9);
+  EXPECT_EQ(max_asym, 0.0);  // after Update, P is exactly symmetric (its lower triangle mirrored)
+  // The covariance did shrink (the updates were not no-ops).
+  EXPECT_LT(fast.LineCov(0)(0, 0), 1e-4);
+  std::printf("in-place vs reference: %d updates, %d merges, up to %d lines: max |dx| = %.3g, max |dP| = %.3g\n",
+              updates, merges, max_lines, max_dx, max_dp);
+}
+
+TEST(LineEkfTest, UpdateColumnsAndDenseUpdateAgree) {
+  // The column form is what Update uses after scanning H; the same H given by
+  // its columns (in another order) gives the same estimate.
+  LineEkf a;
+  const Eigen::Matrix2d r = Eigen::Matrix2d::Identity() * 1e-4;
+  for (int i = 0; i < 6; ++i) a.AddLine({1.0 + 0.3 * i, (i % 4) * M_PI / 2 - M_PI / 2 + 0.01}, r);
+  a.Predict({0.4, 0.2}, MotionNoise{});
+  LineEkf b = a;
+  Eigen::Matrix<double, 2, 5> j;
+  PredictObservation(a.pose(), a.rho(3), a.theta(3), &j);
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2, a.x().size());
+  h.leftCols<3>() = j.leftCols<3>();
+  h.middleCols<2>(9) = j.rightCols<2>();
+  const Eigen::Vector2d y(0.02, -0.01);
+  a.Update(y, h, r);
+  const std::vector<int> cols = {10, 9, 0, 1, 2};
+  Eigen::MatrixXd hc(2, 5);
+  for (int c = 0; c < 5; ++c) hc.col(c) = h.col(cols[static_cast<size_t>(c)]);
+  b.UpdateColumns(y, cols, hc, r);
+  EXPECT_LT((a.x() - b.x()).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_LT((a.P() - b.P()).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_GT(std::abs(a.rho(3) - 1.9), 1e-4);  // the update moved the line
+  // ProjectedCov is H P H' without the zero columns.
+  EXPECT_LT((b.ProjectedCov(h) - h * b.P() * h.transpose()).cwiseAbs().maxCoeff(), 1e-15);
 }
 
 SlamOptions TestOptions() {
