@@ -42,9 +42,12 @@ TEST_P(CampaignSubsetTest, RatesDoNotDropBelowTodays) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Profiles, CampaignSubsetTest,
-                         ::testing::Values(Floor{sim::NoiseProfile::kNominal, 0.0, 0.0, 0.0, 1.0},
-                                           Floor{sim::NoiseProfile::kRealistic, 0.0, 0.0, 0.0, 1.0},
-                                           Floor{sim::NoiseProfile::kHarsh, 0.0, 0.0, 0.0, 1.0}),
+                         // Measured 2026-12-02 on seeds 1-12 (done, pieces good, pose ok, lost):
+                         // nominal 10/12, 0.576, 5/12, 4/12; realistic 5/12, 0, 0, 12/12; harsh
+                         // 1/12, 0, 0, 12/12. Raise these as the robustness work lands.
+                         ::testing::Values(Floor{sim::NoiseProfile::kNominal, 10 / 12.0, 0.575, 5 / 12.0, 4 / 12.0},
+                                           Floor{sim::NoiseProfile::kRealistic, 5 / 12.0, 0.0, 0.0, 1.0},
+                                           Floor{sim::NoiseProfile::kHarsh, 1 / 12.0, 0.0, 0.0, 1.0}),
                          [](const ::testing::TestParamInfo<Floor>& p) { return std::string(sim::ToString(p.param.profile)); });
 
 }  // namespace
