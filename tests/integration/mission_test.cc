@@ -28,7 +28,7 @@ TEST_P(PaperWorldTest, ReachesDoneFindingAndClassifyingEveryPieceWithoutTouching
     EXPECT_EQ(run.core->state(), control::MissionState::kDone) << "seed " << seed;
     EXPECT_LT(run.t, kLimitS);
     EXPECT_EQ(run.sim->collisions(), 0u) << "seed " << seed;
-    const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world);
+    const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world, 0);
     EXPECT_EQ(sc.found, sc.pieces) << "seed " << seed;
     EXPECT_EQ(sc.kind_right, sc.pieces) << "seed " << seed;
     EXPECT_EQ(sc.complete, sc.pieces) << "seed " << seed;
@@ -80,7 +80,7 @@ TEST(RobustnessTest, StartFacingACornerOrBesideAFreeObjectStillFinishes) {
     EXPECT_EQ(run.core->state(), control::MissionState::kDone) << name;
     // A box corner between two front beams is found by the bumper at most once.
     EXPECT_LE(run.sim->collisions(), 1u) << name;
-    const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world);
+    const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world, 0);
     EXPECT_EQ(sc.found, sc.pieces) << name;
     EXPECT_EQ(sc.complete, sc.pieces) << name;
   }
@@ -142,7 +142,7 @@ TEST(FaultRunTest, MissionEndsDoneThroughLossCorruptionReorderingAndGlitches) {
         sim::RunInProcess(world, robot::DefaultCoreOptions(), seed, kLimitS, nullptr, &*faults);
     EXPECT_EQ(run.core->state(), control::MissionState::kDone) << "seed " << seed;
     EXPECT_EQ(run.sim->collisions(), 0u) << "seed " << seed;
-    const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world);
+    const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world, 0);
     EXPECT_EQ(sc.found, sc.pieces) << "seed " << seed;
     EXPECT_EQ(sc.kind_right, sc.pieces) << "seed " << seed;
     EXPECT_EQ(sc.complete, sc.pieces) << "seed " << seed;
@@ -177,14 +177,14 @@ TEST(FaultRunTest, ABoxTheWallFollowingLoopMissedIsFoundByALaterSurvey) {
   const sim::World world = testing::LoadTestWorld("fig14");
   sim::InProcessRun run = sim::RunInProcess(world, robot::DefaultCoreOptions(), 4, 900, nullptr, &*faults);
   EXPECT_EQ(run.core->state(), control::MissionState::kDone);
-  const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world);
+  const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world, 0);
   EXPECT_EQ(sc.found, sc.pieces);
   EXPECT_EQ(sc.complete, sc.pieces);
   // Only with the later surveys: without them the box is never seen.
   robot::CoreOptions one = robot::DefaultCoreOptions();
   one.explore.survey.max_surveys = 1;
   sim::InProcessRun once = sim::RunInProcess(world, one, 4, 900, nullptr, &*faults);
-  EXPECT_EQ(metrics::ScoreObjects(ToJson(once.core->Map()), once.core->slam(), world).found, sc.pieces - 1);
+  EXPECT_EQ(metrics::ScoreObjects(ToJson(once.core->Map()), once.core->slam(), world, 0).found, sc.pieces - 1);
 }
 
 }  // namespace

@@ -116,7 +116,8 @@ RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::Core
   sim::World furniture = world;
   furniture.objects.erase(std::remove_if(furniture.objects.begin(), furniture.objects.end(), IsClutter),
                           furniture.objects.end());
-  const metrics::ObjectScores objects = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), furniture);
+  const metrics::ObjectScores objects = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), furniture,
+                                                                  2 * options.slam.geometry.radius_m);
   s.pieces = objects.pieces;
   s.good = objects.good;
   s.complete = objects.good_complete;

@@ -135,7 +135,7 @@ Pose2 CorrectStart(const Pose2& start, const Pose2& c) {
 }
 
 ObjectScores ScoreObjects(const nlohmann::json& map, const slam::Slam& slam,
-                          const sim::World& world) {
+                          const sim::World& world, double impassable_gap_m) {
   // True pieces: union of touching boxes.
   std::vector<sim::Box> pieces;
   std::vector<bool> used(world.objects.size(), false);
@@ -201,9 +201,16 @@ ObjectScores ScoreObjects(const nlohmann::json& map, const slam::Slam& slam,
     matched[static_cast<size_t>(best)] = true;
     const auto& p = pieces[static_cast<size_t>(best)];
     ++found;
-    const bool wall = p.xmin < room.xmin + 0.05 || p.ymin < room.ymin + 0.05 ||
-                      p.xmax > room.xmax - 0.05 || p.ymax > room.ymax - 0.05;
-    const bool kind_right = (o["kind"] == "wall_contact") == wall;
+    // Per side: the gap to the wall it faces, and whether that side is hidden
+    // from the robot (touching, or closer than the robot can pass).
+    const double gap[4] = {p.xmin - room.xmin, p.ymin - room.ymin, room.xmax - p.xmax, room.ymax - p.ymax};
+    bool wall = false, hidden[4];
+    for (int k = 0; k < 4; ++k) {
+      wall = wall || gap[k] < 0.05;
+      hidden[k] = gap[k] < std::max(0.05, impassable_gap_m);
+    }
+    const bool near_wall = hidden[0] || hidden[1] || hidden[2] || hidden[3];
+    const bool kind_right = (o["kind"] == "wall_contact") == wall || (near_wall && !wall);
     kind_ok += kind_right;
     complete += o["complete"].get<bool>();
     if (kind_right && best_iou >= 0.5) {
@@ -211,10 +218,8 @@ ObjectScores ScoreObjects(const nlohmann::json& map, const slam::Slam& slam,
       good_complete += o["complete"].get<bool>();
     }
     // Edges: a wall-contact piece's wall side is never seen; skip it.
-    const double e[4] = {p.xmin < room.xmin + 0.05 ? 0 : std::abs(x0 - p.xmin),
-                         p.ymin < room.ymin + 0.05 ? 0 : std::abs(y0 - p.ymin),
-                         p.xmax > room.xmax - 0.05 ? 0 : std::abs(x1 - p.xmax),
-                         p.ymax > room.ymax - 0.05 ? 0 : std::abs(y1 - p.ymax)};
+    const double e[4] = {hidden[0] ? 0 : std::abs(x0 - p.xmin), hidden[1] ? 0 : std::abs(y0 - p.ymin),
+                         hidden[2] ? 0 : std::abs(x1 - p.xmax), hidden[3] ? 0 : std::abs(y1 - p.ymax)};
     if (o["complete"].get<bool>()) max_edge = std::max({max_edge, e[0], e[1], e[2], e[3]});
     iou_sum += best_iou;
   }

@@ -55,7 +55,12 @@ Pose2 BestAlignment(const std::vector<slam::LineFeature>& lines, const Pose2& st
 Pose2 CorrectStart(const Pose2& start, const Pose2& correction);
 
 // Objects of a map (contracts §4) against the true furniture: touching boxes form
-// one compound piece; a piece touching a wall is wall-contact.
+// one compound piece; a piece touching a wall is wall-contact. A piece nearer a
+// wall than `impassable_gap_m` (e.g. the robot's diameter: the robot can neither
+// pass through the gap nor see the side facing the wall) is wall-contact as far as
+// the robot can tell, so both kinds count as right for it and its wall-facing
+// side is left out of the edge error, as a touching piece's is. 0 judges the kind
+// by touching alone.
 struct ObjectScores {
   int pieces = 0, found = 0, kind_right = 0, complete = 0, extra = 0;
   int good = 0;           // found with IoU >= 0.5 and the kind right (the campaign's measure)
@@ -63,7 +68,8 @@ struct ObjectScores {
   double max_edge_m = 0;  // largest box-edge error over complete found pieces (wall sides excluded)
   double mean_iou = 0;
 };
-ObjectScores ScoreObjects(const nlohmann::json& map, const slam::Slam& slam, const sim::World& world);
+ObjectScores ScoreObjects(const nlohmann::json& map, const slam::Slam& slam, const sim::World& world,
+                          double impassable_gap_m);
 
 }  // namespace irslam::metrics
 

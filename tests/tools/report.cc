@@ -241,7 +241,7 @@ int main(int argc, char** argv) {
       const sim::World world = load(name);
       for (int s = 1; s <= seeds; ++s) {
         sim::InProcessRun run = sim::RunInProcess(world, with_exploration, static_cast<uint64_t>(s), 900);
-        const metrics::ObjectScores sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world);
+        const metrics::ObjectScores sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world, 0);
         md << "| " << name << " | " << s << " | " << (run.core->state() == control::MissionState::kDone ? "yes" : "**no**")
            << " | " << F(run.t) << " | " << run.sim->collisions() << " | " << sc.pieces << " | " << sc.found
            << " | " << sc.kind_right << " | " << sc.complete << " | " << F(sc.max_edge_m * 100) << " | "
@@ -267,7 +267,7 @@ int main(int argc, char** argv) {
       double max_edge = 0, t_sum = 0, t_max = 0;
       for (int s = 1; s <= kManySeeds; ++s) {
         sim::InProcessRun run = sim::RunInProcess(world, with_exploration, static_cast<uint64_t>(s), 900);
-        metrics::ObjectScores sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world);
+        metrics::ObjectScores sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world, 0);
         const int furniture = name == "chair_legs" ? 2 : sc.pieces;
         done += run.core->state() == control::MissionState::kDone;
         touched += run.sim->collisions() > 0;
