@@ -2,10 +2,12 @@
 // following, survey) on the paper's worlds and on the robustness cases.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 
 #include "daemon/core_json.h"
 #include "robot/robot_core.h"
+#include "sim/generator.h"
 #include "sim/sim_run.h"
 #include "tests/testing/worlds.h"
 #include "tests/tools/metrics.h"
@@ -185,6 +187,56 @@ TEST(FaultRunTest, ABoxTheWallFollowingLoopMissedIsFoundByALaterSurvey) {
   one.explore.survey.max_surveys = 1;
   sim::InProcessRun once = sim::RunInProcess(world, one, 4, 900, nullptr, &*faults);
   EXPECT_EQ(metrics::ScoreObjects(ToJson(once.core->Map()), once.core->slam(), world, 0).found, sc.pieces - 1);
+}
+
+// The campaign's scoring rules (tests/tools/metrics.h) on two generated worlds.
+sim::World Furniture(uint64_t seed) {
+  sim::World w = sim::GenerateWorld(seed, sim::NoiseProfile::kNominal);
+  w.objects.erase(std::remove_if(w.objects.begin(), w.objects.end(),
+                                 [](const sim::Box& b) {
+                                   return std::min(b.xmax - b.xmin, b.ymax - b.ymin) <= 0.06;
+                                 }),
+                  w.objects.end());
+  return w;
+}
+
+TEST(ScoringTest, APieceNearerAWallThanTheRobotCanPassMayBeModelledWallContact) {
+  // Nominal seed 14: one piece 5.5 cm from the top wall, modelled wall-contact.
+  const sim::World world = Furniture(14);
+  ASSERT_EQ(world.objects.size(), 2u);
+  EXPECT_NEAR(world.Bounds().ymax - world.objects[1].ymax, 0.055, 0.001);
+  sim::InProcessRun run = sim::RunInProcess(world, robot::DefaultCoreOptions(), 14, kLimitS);
+  const auto map = ToJson(run.core->Map());
+  ASSERT_EQ(map["objects"].size(), 1u);
+  EXPECT_EQ(map["objects"][0]["kind"], "wall_contact");
+  const double diameter = 2 * robot::DefaultCoreOptions().slam.geometry.radius_m;
+  const auto lenient = metrics::ScoreObjects(map, run.core->slam(), world, diameter);
+  const auto strict = metrics::ScoreObjects(map, run.core->slam(), world, 0);
+  EXPECT_EQ(lenient.pieces, 1);  // two touching boxes: one compound piece
+  EXPECT_EQ(lenient.good, 1);
+  EXPECT_EQ(strict.kind_right, 0);
+  EXPECT_EQ(strict.good, 0);
+}
+
+TEST(ScoringTest, BoxesUnderTenCentimetresApartAreOnePiece) {
+  // Nominal seed 11: a bed in a corner with its night table 2 cm beside it.
+  const sim::World world = Furniture(11);
+  int close_pairs = 0;
+  for (size_t i = 0; i < world.objects.size(); ++i) {
+    for (size_t k = i + 1; k < world.objects.size(); ++k) {
+      const auto& a = world.objects[i];
+      const auto& b = world.objects[k];
+      const double gap = std::max(std::max(a.xmin - b.xmax, b.xmin - a.xmax), std::max(a.ymin - b.ymax, b.ymin - a.ymax));
+      close_pairs += gap > 0.001 && gap < 0.10;
+    }
+  }
+  ASSERT_EQ(close_pairs, 1);
+  sim::InProcessRun run = sim::RunInProcess(world, robot::DefaultCoreOptions(), 11, kLimitS);
+  const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world, 0);
+  // 7 boxes; by touching alone 5 pieces (docs/robustness.md before the rule),
+  // with the bed and its night table one: 4.
+  EXPECT_EQ(world.objects.size(), 7u);
+  EXPECT_EQ(sc.pieces, 4);
 }
 
 }  // namespace

@@ -54,8 +54,8 @@ Pose2 BestAlignment(const std::vector<slam::LineFeature>& lines, const Pose2& st
 // Applies a correction from BestAlignment to the start pose used for comparisons.
 Pose2 CorrectStart(const Pose2& start, const Pose2& correction);
 
-// Objects of a map (contracts §4) against the true furniture: touching boxes form
-// one compound piece; a piece touching a wall is wall-contact. A piece nearer a
+// Objects of a map (contracts §4) against the true furniture: touching boxes (and
+// boxes under 10 cm apart) form one compound piece; a piece touching a wall is wall-contact. A piece nearer a
 // wall than `impassable_gap_m` (e.g. the robot's diameter: the robot can neither
 // pass through the gap nor see the side facing the wall) is wall-contact as far as
 // the robot can tell, so both kinds count as right for it and its wall-facing
