@@ -22,10 +22,9 @@ const char* ToString(CleanState s) {
 }
 
 GoToOptions CleaningGoTo(GoToOptions g, const CleaningOptions& c) {
-  g.clearance_m = std::max(0.0, c.clearance_m - 0.04);
+  g.clearance_m = std::max(0.0, c.clearance_m - 0.02);
   g.hard_clearance_m = std::min(g.hard_clearance_m, g.clearance_m);
   g.front_stop_m = 0.1;
-  g.line_extension_m = std::min(g.line_extension_m, c.clearance_m);
   return g;
 }
 
@@ -58,12 +57,17 @@ void Clean::Begin(double t, const slam::Slam& slam, const EnvironmentModel& m,
     for (const auto& p : bumps.points()) contacts.push_back(RotateVector(p, rot));
     const Pose2 me = slam.map_pose();
     plan_ = PlanCoverage(*m.room.box, objects, contacts, {me.x, me.y}, radius_m_, options_);
-    grid_.Init(*m.room.box, plan_.cells, 0.5 * options_.cleaning_width_m, options_.coverage_cell_m);
+    grid_.Init(*m.room.box, plan_.FreeRects(), 0.5 * options_.cleaning_width_m,
+               options_.coverage_cell_m);
   }
   for (size_t i = 0; i < plan_.order.size(); ++i) {
     const CoverageCell& c = plan_.cells[static_cast<size_t>(plan_.order[i])];
-    progress_.cells.push_back(
-        {c.id, c.Outline(0.5 * options_.cleaning_width_m), plan_.routes[i], false, false});
+    std::vector<Eigen::Vector2d> outline = c.Outline(0.5 * options_.cleaning_width_m);
+    if (plan_.swapped) {
+      for (auto& p : outline) p = Eigen::Vector2d(p.y(), p.x());
+      std::reverse(outline.begin(), outline.end());  // counter-clockwise again
+    }
+    progress_.cells.push_back({c.id, std::move(outline), plan_.routes[i], false, false});
   }
   progress_.cells_total = static_cast<int>(plan_.order.size());
   progress_.total_m2 = grid_.total_m2();
@@ -182,12 +186,23 @@ Clean::Result Clean::Step(double t, const slam::Slam& slam, const RangeScan& raw
         if (point_ >= plan_.routes[cell_].size()) NextCell(false);
         return {};
       }
-      if (go_to_.TryGoal(RotateVector(goal, -rot), 0, false, slam, bumps)) {
-        go_to_.Begin(t);
-        phase_ = Phase::kTransit;
-      } else {
-        SkipPoint();
+      // A route point lies at the cleaning clearance, a little beyond the
+      // planner's on its grid: if it cannot be planned to, try it moved along
+      // the route into the cell (at most three plans).
+      const auto& route = plan_.routes[cell_];
+      const Eigen::Vector2d toward =
+          point_ + 1 < route.size() ? route[point_ + 1] : (point_ > 0 ? route[point_ - 1] : goal);
+      const Eigen::Vector2d dir =
+          (toward - goal).norm() > 1e-6 ? Eigen::Vector2d((toward - goal).normalized()) : Eigen::Vector2d(0, 0);
+      for (double shift : {0.0, 0.06, 0.12}) {
+        if (shift > 0 && shift > (toward - goal).norm() - 0.02) break;
+        if (go_to_.TryGoal(RotateVector(goal + shift * dir, -rot), 0, false, slam, bumps)) {
+          go_to_.Begin(t);
+          phase_ = Phase::kTransit;
+          return {};
+        }
       }
+      SkipPoint();
       return {};
     }
     case Phase::kTransit: {

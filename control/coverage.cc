@@ -19,6 +19,10 @@ options::Table<CleaningOptions> CleaningKeys() {
        "at most this many contacts (the latest) go into the plan"},
       {"min_interval_m", &O::min_interval_m, 0.0001, 1, "m",
        "free intervals and overlaps narrower than this do not count"},
+      {"both_directions", &O::both_directions, 0, 0, "",
+       "plan lanes along y and along x and keep the shorter (false: along y)"},
+      {"edge_pass", &O::edge_pass, 0, 0, "",
+       "go round each cell along its walls and furniture before its lanes"},
       {"max_cells", &O::max_cells, 1, 10000, "", "cells of the decomposition at most"},
       {"two_opt_rounds", &O::two_opt_rounds, 0, 1000, "", "improvement passes over the tour"},
       {"sweep_speed_mps", &O::sweep_speed_mps, 0.01, 2, "m/s", "speed along a lane"},
@@ -233,7 +237,7 @@ double Gap(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return (a - b).
 }  // namespace
 
 std::vector<Eigen::Vector2d> SweepRoute(const CoverageCell& cell, double spacing, bool mirror_x,
-                                        bool mirror_y) {
+                                        bool mirror_y, bool edge_pass) {
   const CoverageCell c = Mirrored(cell, mirror_x, mirror_y);
   std::vector<Eigen::Vector2d> r;
   if (c.slabs.empty()) return r;
@@ -245,18 +249,24 @@ std::vector<Eigen::Vector2d> SweepRoute(const CoverageCell& cell, double spacing
     r = {{x, lo}, {x, hi}};
   } else {
     const auto lane_x = [&](int k) { return x0 + w * k / (n - 1); };
-    // Edge pass: along the lower boundary, up the last lane, back along the upper
-    // boundary, down the first lane.
-    Boundary(c, x0, x1, false, &r);
-    Boundary(c, x1, x0, true, &r);
+    int first = 0, last = n - 1;
+    if (edge_pass) {
+      // Edge pass: along the lower boundary, up the last lane, back along the
+      // upper boundary, down the first lane; then the lanes in between.
+      Boundary(c, x0, x1, false, &r);
+      Boundary(c, x1, x0, true, &r);
+      first = 1;
+      last = n - 2;
+    }
     r.emplace_back(x0, IntervalAt(c, x0).first);
-    // The lanes in between, up and down, joined along the boundaries.
+    // The lanes, up and down, joined along the boundaries.
     bool at_top = false;
     double x = x0;
-    for (int k = 1; k < n - 1; ++k) {
+    for (int k = first; k <= last; ++k) {
       const double xk = lane_x(k);
-      Boundary(c, x, xk, at_top, &r);
+      if (k > 0) Boundary(c, x, xk, at_top, &r);
       const auto [lo, hi] = IntervalAt(c, xk);
+      if (k == 0) r.emplace_back(xk, at_top ? hi : lo);
       r.emplace_back(xk, at_top ? lo : hi);
       at_top = !at_top;
       x = xk;
@@ -270,10 +280,23 @@ std::vector<Eigen::Vector2d> SweepRoute(const CoverageCell& cell, double spacing
   return r;
 }
 
-CoveragePlan PlanCoverage(const Box& room, const std::vector<Box>& objects,
-                          const std::vector<Eigen::Vector2d>& bumps, const Eigen::Vector2d& start,
-                          double radius, const CleaningOptions& o) {
+namespace {
+
+Box Swap(const Box& b) { return {b.ymin, b.xmin, b.ymax, b.xmax}; }
+Eigen::Vector2d Swap(const Eigen::Vector2d& p) { return {p.y(), p.x()}; }
+
+// The plan with lanes along y (swap: along x, by planning in the frame with x
+// and y swapped and swapping the routes back).
+CoveragePlan PlanOriented(Box room, std::vector<Box> objects, std::vector<Eigen::Vector2d> bumps,
+                          Eigen::Vector2d start, double radius, const CleaningOptions& o, bool swap) {
+  if (swap) {
+    room = Swap(room);
+    for (auto& b : objects) b = Swap(b);
+    for (auto& p : bumps) p = Swap(p);
+    start = Swap(start);
+  }
   CoveragePlan plan;
+  plan.swapped = swap;
   const double g = radius + o.clearance_m;
   plan.inflation_m = g;
   plan.lane_spacing_m = std::max(0.02, o.cleaning_width_m - o.overlap_m);
@@ -336,7 +359,7 @@ CoveragePlan PlanCoverage(const Box& room, const std::vector<Box>& objects,
     std::vector<Eigen::Vector2d> best;
     for (int corner = 0; corner < 4; ++corner) {
       auto r = SweepRoute(plan.cells[static_cast<size_t>(ci)], plan.lane_spacing_m, corner & 1,
-                          corner & 2);
+                          corner & 2, o.edge_pass);
       if (best.empty() || Gap(at, r.front()) < Gap(at, best.front())) best = std::move(r);
     }
     plan.transit_length_m += Gap(at, best.front());
@@ -345,11 +368,37 @@ CoveragePlan PlanCoverage(const Box& room, const std::vector<Box>& objects,
     plan.routes.push_back(std::move(best));
   }
   plan.order = std::move(order);
+  if (swap) {
+    for (auto& r : plan.routes)
+      for (auto& p : r) p = Swap(p);
+  }
   return plan;
 }
 
-void CoverageGrid::Init(const Box& room, const std::vector<CoverageCell>& cells, double r,
-                        double cell_m) {
+}  // namespace
+
+std::vector<Box> CoveragePlan::FreeRects() const {
+  std::vector<Box> out;
+  for (const auto& c : cells) {
+    for (const auto& s : c.slabs) {
+      const Box b{s.x0, s.ylo, s.x1, s.yhi};
+      out.push_back(swapped ? Swap(b) : b);
+    }
+  }
+  return out;
+}
+
+CoveragePlan PlanCoverage(const Box& room, const std::vector<Box>& objects,
+                          const std::vector<Eigen::Vector2d>& bumps, const Eigen::Vector2d& start,
+                          double radius, const CleaningOptions& o) {
+  CoveragePlan along_y = PlanOriented(room, objects, bumps, start, radius, o, false);
+  if (!o.both_directions) return along_y;
+  CoveragePlan along_x = PlanOriented(room, objects, bumps, start, radius, o, true);
+  const auto cost = [](const CoveragePlan& p) { return p.route_length_m + p.transit_length_m; };
+  return cost(along_x) < cost(along_y) - 1e-9 ? along_x : along_y;
+}
+
+void CoverageGrid::Init(const Box& room, const std::vector<Box>& rects, double r, double cell_m) {
   room_ = room;
   cell_m_ = cell_m;
   radius_m_ = r;
@@ -358,8 +407,9 @@ void CoverageGrid::Init(const Box& room, const std::vector<CoverageCell>& cells,
   ny_ = std::clamp(static_cast<int>(std::ceil(room.height() / cell_m)), 0, 4000);
   state_.assign(static_cast<size_t>(nx_) * static_cast<size_t>(ny_), 0);
   target_ = covered_ = 0;
-  for (const auto& c : cells) {
-    for (const auto& s : c.slabs) {
+  for (const Box& b : rects) {
+    {
+      const Slab s{b.xmin, b.xmax, b.ymin, b.ymax};
       const int i0 = std::max(0, static_cast<int>((s.x0 - r - room.xmin) / cell_m));
       const int i1 = std::min(nx_ - 1, static_cast<int>((s.x1 + r - room.xmin) / cell_m));
       const int j0 = std::max(0, static_cast<int>((s.ylo - r - room.ymin) / cell_m));

@@ -32,6 +32,8 @@ struct CleaningOptions {
   double bump_block_m = 0.05;      // a remembered contact blocks the robot radius plus this round it
   int max_bump_obstacles = 40;     // at most this many contacts (the latest) go into the plan
   double min_interval_m = 0.005;   // free intervals and overlaps narrower than this do not count
+  bool both_directions = true;      // plan lanes along y and along x, keep the shorter
+  bool edge_pass = true;           // round each cell along its walls and furniture before its lanes
   int max_cells = 300;             // decomposition bound (more: the smallest are dropped)
   int two_opt_rounds = 30;         // improvement passes over the tour
   double sweep_speed_mps = 0.15;   // speed along a lane
@@ -66,6 +68,7 @@ struct CoverageCell {
 };
 
 struct CoveragePlan {
+  bool swapped = false;        // cells and slabs have x and y swapped (lanes along the map's x)
   double inflation_m = 0;      // robot radius + clearance
   double lane_spacing_m = 0;
   Box free;                    // the centre's free space bounds (room shrunk)
@@ -75,6 +78,8 @@ struct CoveragePlan {
   std::vector<std::vector<Eigen::Vector2d>> routes;
   double route_length_m = 0;   // sum of the routes
   double transit_length_m = 0; // straight-line gaps between routes (from the start)
+  // The free rectangles of the robot's centre, in the map frame.
+  std::vector<Box> FreeRects() const;
 };
 
 // The free space of the robot's centre, decomposed into cells. Obstacles are
@@ -82,10 +87,11 @@ struct CoveragePlan {
 std::vector<CoverageCell> Decompose(const Box& free, const std::vector<Box>& obstacles,
                                     const CleaningOptions& options);
 
-// The sweep of one cell: edge pass round it, then the lanes in between, starting
-// in the corner given (mirror_x: from the right; mirror_y: from the top).
+// The sweep of one cell: edge pass round it (if asked for), then the lanes in
+// between, starting in the corner given (mirror_x: from the right; mirror_y:
+// from the top).
 std::vector<Eigen::Vector2d> SweepRoute(const CoverageCell& cell, double spacing_m, bool mirror_x,
-                                        bool mirror_y);
+                                        bool mirror_y, bool edge_pass = true);
 
 // The whole plan from the room model (map frame), contacts (map frame) and where
 // the robot stands (map frame).
@@ -99,8 +105,7 @@ class CoverageGrid {
  public:
   CoverageGrid() = default;
   // Cells of the floor within body_radius_m of the plan's free space are the target.
-  void Init(const Box& room, const std::vector<CoverageCell>& cells, double body_radius_m,
-            double cell_m);
+  void Init(const Box& room, const std::vector<Box>& free_rects, double body_radius_m, double cell_m);
   // The body disc at p (radius body_radius_m) cleans the floor under it.
   void Mark(const Eigen::Vector2d& p);
   double total_m2() const { return target_ * cell_m_ * cell_m_; }

@@ -46,7 +46,9 @@ double RouteClearance(const std::vector<Eigen::Vector2d>& r, const Box& b) {
 }
 
 TEST(CoverageTest, AnEmptyRoomIsOneCellOfTheShrunkRoom) {
-  const CoveragePlan p = PlanCoverage({0, 0, 4, 3}, {}, {}, {1, 1}, kRadius, Options());
+  CleaningOptions o = Options();
+  o.both_directions = false;
+  const CoveragePlan p = PlanCoverage({0, 0, 4, 3}, {}, {}, {1, 1}, kRadius, o);
   ASSERT_EQ(p.cells.size(), 1u);
   EXPECT_NEAR(p.cells[0].area_m2(), 3.6 * 2.6, 1e-9);
   ASSERT_EQ(p.routes.size(), 1u);
@@ -135,13 +137,32 @@ TEST(CoverageTest, AContactBlocksTheFloorRoundIt) {
 TEST(CoverageTest, TheGridCountsTheReachableFloorAndWhatTheBodySwept) {
   const CoveragePlan p = PlanCoverage({0, 0, 4, 3}, {}, {}, {1, 1}, kRadius, Options());
   CoverageGrid g;
-  g.Init({0, 0, 4, 3}, p.cells, 0.17, 0.02);
+  g.Init({0, 0, 4, 3}, p.FreeRects(), 0.17, 0.02);
   // The shrunk room grown by the body radius: all but a 3 cm strip and rounded corners.
   const double expect = 3.6 * 2.6 + 2 * 0.17 * (3.6 + 2.6) + M_PI * 0.17 * 0.17;
   EXPECT_NEAR(g.total_m2(), expect, 0.2);
   EXPECT_EQ(g.covered_m2(), 0);
   for (double x = 0.2; x <= 3.8; x += 0.01) g.Mark({x, 1.5});
   EXPECT_NEAR(g.covered_m2(), 3.6 * 0.34 + M_PI * 0.17 * 0.17, 0.08);
+}
+
+TEST(CoverageTest, LanesGoAlongTheLongerSideWhenThatIsShorterInAll) {
+  // 6 m x 2 m: lanes along x (2 m / 0.3 m: 7 lanes of 5.6 m) beat lanes along y
+  // (20 lanes of 1.6 m and their turns).
+  const CoveragePlan p = PlanCoverage({0, 0, 6, 2}, {}, {}, {1, 1}, kRadius, Options());
+  EXPECT_TRUE(p.swapped);
+  ASSERT_EQ(p.routes.size(), 1u);
+  int along_x = 0;
+  for (size_t k = 1; k < p.routes[0].size(); ++k) {
+    const Eigen::Vector2d d = p.routes[0][k] - p.routes[0][k - 1];
+    if (std::abs(d.y()) < 1e-9 && std::abs(std::abs(d.x()) - 5.6) < 1e-9) ++along_x;
+  }
+  EXPECT_EQ(along_x, 7);
+  CleaningOptions o = Options();
+  o.both_directions = false;
+  const CoveragePlan q = PlanCoverage({0, 0, 6, 2}, {}, {}, {1, 1}, kRadius, o);
+  EXPECT_FALSE(q.swapped);
+  EXPECT_LT(p.route_length_m + p.transit_length_m, q.route_length_m + q.transit_length_m);
 }
 
 }  // namespace
