@@ -23,7 +23,8 @@ const char* ToString(CleanState s) {
 
 GoToOptions CleaningGoTo(GoToOptions g, const CleaningOptions& c) {
   g.clearance_m = std::max(0.0, c.clearance_m - 0.02);
-  g.hard_clearance_m = std::min(g.hard_clearance_m, g.clearance_m);
+  // Below the clearance, so a start inside it can still be left.
+  g.hard_clearance_m = std::min(g.hard_clearance_m, 0.5 * g.clearance_m);
   g.front_stop_m = 0.1;
   return g;
 }
@@ -78,6 +79,8 @@ void Clean::Begin(double t, const slam::Slam& slam, const EnvironmentModel& m,
   cross_sq_ = 0;
   cross_n_ = 0;
   phase_ = plan_.order.empty() ? Phase::kDone : Phase::kPlanGoal;
+  progress_t_ = t;
+  progress_at_ = {slam.map_pose().x, slam.map_pose().y};
 }
 
 void Clean::SetState(CleanState s, double t, double distance_m) {
@@ -174,6 +177,16 @@ Clean::Result Clean::Step(double t, const slam::Slam& slam, const RangeScan& raw
   const Pose2 me = slam.map_pose();
   grid_.Mark({me.x, me.y});
   const double rot = slam.map_rotation();
+  // Stuck (turning on the spot, or planning and blocked in turn): give the route
+  // point up, so nothing is retried forever.
+  if ((Eigen::Vector2d(me.x, me.y) - progress_at_).norm() > 0.1) {
+    progress_at_ = {me.x, me.y};
+    progress_t_ = t;
+  } else if (phase_ != Phase::kDone && t - progress_t_ > options_.stuck_s) {
+    progress_t_ = t;
+    SkipPoint();
+    return {};
+  }
   switch (phase_) {
     case Phase::kDone:
       return {Status::kDone, {}};

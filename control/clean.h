@@ -110,6 +110,8 @@ class Clean {
   size_t point_ = 0;  // the route point driven to
   int failures_ = 0;  // in this cell
   double start_distance_ = 0;
+  double progress_t_ = 0;  // got 0.1 m further at this time ...
+  Eigen::Vector2d progress_at_ = Eigen::Vector2d::Zero();  // ... from here
   double cross_sq_ = 0;
   long cross_n_ = 0;
 };

@@ -39,6 +39,8 @@ options::Table<CleaningOptions> CleaningKeys() {
       {"front_stop_m", &O::front_stop_m, 0, 1, "m",
        "an unmapped obstacle ahead within the robot radius plus this: plan round it"},
       {"coverage_cell_m", &O::coverage_cell_m, 0.01, 0.5, "m", "grid of the covered-floor estimate"},
+      {"stuck_s", &O::stuck_s, 1, 3600, "s",
+       "no 0.1 m of progress for this long while cleaning: the route point is given up"},
       {"max_goal_failures", &O::max_goal_failures, 1, 1000, "",
        "route points given up in one cell before the rest of it is reported unreachable"},
       {"max_time_s", &O::max_time_s, 1, 1e6, "s", "cleaning plus going home, robot time"},

@@ -46,6 +46,7 @@ struct CleaningOptions {
   double front_stop_m = 0.08;      // an unmapped obstacle ahead within the robot radius + this
                                    // (and short of where the lane ends): plan round it
   double coverage_cell_m = 0.05;   // grid of the covered-floor estimate
+  double stuck_s = 20;             // no 0.1 m of progress for this long: the route point is given up
   int max_goal_failures = 4;       // route points given up in one cell before the cell is
   double max_time_s = 3600;        // cleaning plus going home, robot time
   double home_tolerance_m = 0.05;  // home is reached within this

@@ -367,13 +367,16 @@ WheelCommand Mission::StepClean(double t, double dt, const slam::Slam& slam,
   clean_summary_ = buf;
   home_planned_ = false;
   home_attempts_ = 0;
+  home_retry_t_ = t;
   return To(MissionState::kReturnHome, t, clean_summary_ + "; returning home");
 }
 
 WheelCommand Mission::StepReturnHome(double t, double dt, const slam::Slam& slam,
                                      const RangeScan& raw_scan, uint8_t bumpers) {
   if (!home_planned_) {
-    // One plan per period.
+    // One plan per period, and after a failure not for a while.
+    if (t < home_retry_t_) return Halt();
+    home_retry_t_ = t + 2.0;
     if (home_go_to_.TryGoal({home_.x, home_.y}, home_.theta, true, slam, bumps_)) {
       home_go_to_.Begin(t);
       home_planned_ = true;

@@ -193,6 +193,7 @@ class Mission {
   Pose2 home_;  // internal frame: where the mission started
   bool home_planned_ = false;
   int home_attempts_ = 0;
+  double home_retry_t_ = 0;  // the next plan home not before this
   double clean_started_ = 0;
   std::string clean_summary_;
   double last_distance_ = 0;  // travelled, at the last step

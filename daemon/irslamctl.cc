@@ -53,11 +53,11 @@ std::string StatusLine(const nlohmann::json& s) {
     const double f = std::clamp(c.value("fraction", 0.0), 0.0, 1.0);
     const int n = static_cast<int>(std::lround(f * 20));
     const double eta = c.value("eta_s", 0.0);
-    char p[160];
-    std::snprintf(p, sizeof p, " clean [%s%s] %5.1f%% cells %d/%d eta %dm%02ds", std::string(n, '#').c_str(),
+    char bar[160];
+    std::snprintf(bar, sizeof bar, " clean [%s%s] %5.1f%% cells %d/%d eta %dm%02ds", std::string(n, '#').c_str(),
                   std::string(20 - n, '.').c_str(), 100 * f, c.value("cells_done", 0), c.value("cells_total", 0),
                   static_cast<int>(eta) / 60, static_cast<int>(eta) % 60);
-    line = p + std::string(" ") + line;
+    line = bar + std::string(" ") + line;
     line = line.substr(0, line.find(" can rx"));
   }
   return line;

@@ -42,7 +42,7 @@ TEST_P(CleanWorldTest, CleansTheReachableFloorAndReturnsHome) {
 
 INSTANTIATE_TEST_SUITE_P(PaperWorlds, CleanWorldTest,
                          ::testing::Values(Floor{"fig14", 0.95, 2.3}, Floor{"fig16", 0.95, 2.3}),
-                         [](const auto& info) { return std::string(info.param.world); });
+                         [](const ::testing::TestParamInfo<Floor>& p) { return std::string(p.param.world); });
 
 TEST(CleanModeTest, ExploreModeNeverCleans) {
   const sim::World world = testing::LoadTestWorld("fig14");

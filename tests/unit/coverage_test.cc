@@ -16,6 +16,7 @@ CleaningOptions Options() {
   o.clearance_m = 0.03;  // inflation 0.2 m
   o.cleaning_width_m = 0.34;
   o.overlap_m = 0.04;  // lanes 0.3 m apart
+  o.both_directions = false;  // lanes along y, the sweep along x (unless a test says otherwise)
   return o;
 }
 
@@ -65,7 +66,9 @@ TEST(CoverageTest, AnEmptyRoomIsOneCellOfTheShrunkRoom) {
 
 TEST(CoverageTest, AFreeBoxInTheMiddleMakesFourCells) {
   const Box box{1.5, 1.0, 2.5, 2.0};
-  const CoveragePlan p = PlanCoverage({0, 0, 4, 3}, {box}, {}, {0.5, 0.5}, kRadius, Options());
+  CleaningOptions o = Options();
+  o.both_directions = false;  // lanes along y: the sweep goes along x
+  const CoveragePlan p = PlanCoverage({0, 0, 4, 3}, {box}, {}, {0.5, 0.5}, kRadius, o);
   ASSERT_EQ(p.cells.size(), 4u);  // left, below, above, right
   EXPECT_NEAR(TotalArea(p.cells), 3.6 * 2.6 - 1.4 * 1.4, 1e-9);
   std::vector<double> areas;
@@ -149,7 +152,9 @@ TEST(CoverageTest, TheGridCountsTheReachableFloorAndWhatTheBodySwept) {
 TEST(CoverageTest, LanesGoAlongTheLongerSideWhenThatIsShorterInAll) {
   // 6 m x 2 m: lanes along x (2 m / 0.3 m: 7 lanes of 5.6 m) beat lanes along y
   // (20 lanes of 1.6 m and their turns).
-  const CoveragePlan p = PlanCoverage({0, 0, 6, 2}, {}, {}, {1, 1}, kRadius, Options());
+  CleaningOptions both = Options();
+  both.both_directions = true;
+  const CoveragePlan p = PlanCoverage({0, 0, 6, 2}, {}, {}, {1, 1}, kRadius, both);
   EXPECT_TRUE(p.swapped);
   ASSERT_EQ(p.routes.size(), 1u);
   int along_x = 0;
