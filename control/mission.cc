@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 namespace irslam::control {
 
@@ -361,10 +360,12 @@ WheelCommand Mission::StepClean(double t, double dt, const slam::Slam& slam,
   if (r.status == Clean::Status::kCleaning) return ToWheels(r.twist, dt);
   clean_.SetState(CleanState::kReturning, t, slam.distance_m());
   const CleaningProgress p = clean_.Progress(t, slam.distance_m());
-  char buf[128];
-  std::snprintf(buf, sizeof buf, "cleaned %d of %d cells, %.1f of %.1f m2", p.cells_done,
-                p.cells_total, p.covered_m2, p.total_m2);
-  clean_summary_ = buf;
+  const auto one_decimal = [](double v) {
+    const long k = std::lround(std::max(0.0, v) * 10);
+    return std::to_string(k / 10) + "." + std::to_string(k % 10);
+  };
+  clean_summary_ = "cleaned " + std::to_string(p.cells_done) + " of " + std::to_string(p.cells_total) +
+                   " cells, " + one_decimal(p.covered_m2) + " of " + one_decimal(p.total_m2) + " m2";
   home_planned_ = false;
   home_attempts_ = 0;
   home_retry_t_ = t;
