@@ -105,16 +105,10 @@ void Clean::NextCell(bool unreachable) {
   if (cell_ >= plan_.routes.size()) return;
   auto& pc = progress_.cells[cell_];
   if (unreachable) {
-    // The share of the cell's route not swept, of its area.
+    // The rest of the route, not swept: its length times the lane spacing.
     const auto& r = plan_.routes[cell_];
-    double all = 0, rest = 0;
-    for (size_t k = 1; k < r.size(); ++k) {
-      const double l = (r[k] - r[k - 1]).norm();
-      all += l;
-      if (k >= point_) rest += l;
-    }
-    const double area = plan_.cells[static_cast<size_t>(plan_.order[cell_])].area_m2();
-    progress_.unreachable_m2 += all > 0 ? area * rest / all : area;
+    for (size_t k = std::max<size_t>(point_, 1); k < r.size(); ++k)
+      progress_.unreachable_m2 += (r[k] - r[k - 1]).norm() * plan_.lane_spacing_m;
     pc.unreachable = true;
   } else {
     pc.done = true;
@@ -127,6 +121,10 @@ void Clean::NextCell(bool unreachable) {
 }
 
 void Clean::SkipPoint() {
+  // The segment to the point given up is not swept.
+  const auto& r = plan_.routes[cell_];
+  if (point_ >= 1 && point_ < r.size())
+    progress_.unreachable_m2 += (r[point_] - r[point_ - 1]).norm() * plan_.lane_spacing_m;
   ++failures_;
   ++point_;
   if (failures_ >= options_.max_goal_failures || point_ >= plan_.routes[cell_].size()) {
