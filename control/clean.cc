@@ -101,14 +101,22 @@ double Clean::RemainingRoute() const {
   return rest;
 }
 
+double Clean::AreaShare(double length_m) const {
+  const auto& r = plan_.routes[cell_];
+  double all = 0;
+  for (size_t k = 1; k < r.size(); ++k) all += (r[k] - r[k - 1]).norm();
+  const double area = plan_.cells[static_cast<size_t>(plan_.order[cell_])].area_m2();
+  return all > 0 ? area * length_m / all : 0;
+}
+
 void Clean::NextCell(bool unreachable) {
   if (cell_ >= plan_.routes.size()) return;
   auto& pc = progress_.cells[cell_];
   if (unreachable) {
-    // The rest of the route, not swept: its length times the lane spacing.
+    // The rest of the route, not swept: its share of the cell's area.
     const auto& r = plan_.routes[cell_];
     for (size_t k = std::max<size_t>(point_, 1); k < r.size(); ++k)
-      progress_.unreachable_m2 += (r[k] - r[k - 1]).norm() * plan_.lane_spacing_m;
+      progress_.unreachable_m2 += AreaShare((r[k] - r[k - 1]).norm());
     pc.unreachable = true;
   } else {
     pc.done = true;
@@ -124,7 +132,7 @@ void Clean::SkipPoint() {
   // The segment to the point given up is not swept.
   const auto& r = plan_.routes[cell_];
   if (point_ >= 1 && point_ < r.size())
-    progress_.unreachable_m2 += (r[point_] - r[point_ - 1]).norm() * plan_.lane_spacing_m;
+    progress_.unreachable_m2 += AreaShare((r[point_] - r[point_ - 1]).norm());
   ++failures_;
   ++point_;
   if (failures_ >= options_.max_goal_failures || point_ >= plan_.routes[cell_].size()) {

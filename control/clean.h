@@ -96,6 +96,8 @@ class Clean {
   // Gives the current route point up.
   void SkipPoint();
   double RemainingRoute() const;
+  // The share of the current cell's area that a length of its route sweeps.
+  double AreaShare(double length_m) const;
   Twist Follow(const Pose2& me, const RangeScan& scan, bool* blocked, bool* passed);
 
   CleaningOptions options_;
