@@ -21,6 +21,10 @@ const char* ToString(MissionState s) {
       return "done";
     case MissionState::kFault:
       return "fault";
+    case MissionState::kClean:
+      return "clean";
+    case MissionState::kReturnHome:
+      return "return_home";
   }
   return "?";
 }
@@ -40,6 +44,8 @@ options::Table<MissionOptions> MissionKeys() {
       {"progress_step_m", &O::progress_step_m, 0.001, 10, "m", "distance that counts as progress"},
       {"max_step_s", &O::max_step_s, 0.001, 10, "s",
        "longest control step the acceleration limit allows for"},
+      {"mode", &O::mode, 0, 0, "",
+       "explore: map the room; clean: map it, clean the floor, return to the start"},
   };
   return kKeys;
 }
@@ -55,7 +61,16 @@ Mission::Mission(MissionOptions options, WallFollowerOptions wall, ExploreOption
       loop_(options.loop),
       go_to_(explore.go_to, slam.geometry, slam.mounts),
       contour_(explore.contour, wall.follow_distance_m),
-      survey_(explore.survey) {}
+      survey_(explore.survey),
+      clean_(options.cleaning, explore.go_to, slam.geometry, slam.mounts),
+      home_go_to_(
+          [&] {
+            GoToOptions g = CleaningGoTo(explore.go_to, options.cleaning);
+            g.goal_tolerance_m = options.cleaning.home_tolerance_m;
+            return g;
+          }(),
+          slam.geometry, slam.mounts),
+      clean_mode_(options.mode == "clean") {}
 
 void Mission::Enter(MissionState s, double t, std::string reason) {
   state_ = s;
@@ -82,12 +97,16 @@ bool Mission::Start(double t, std::string* why) {
   survey_.Reset();
   loops_done_ = 0;
   loop_times_.clear();
+  home_set_ = false;
+  clean_.Reset();
   Enter(MissionState::kWallFollow, t, "");
   return true;
 }
 
 void Mission::Stop(double t) {
   if (state_ == MissionState::kFault) resume_state_ = MissionState::kIdle;
+  if (state_ == MissionState::kClean || state_ == MissionState::kReturnHome)
+    clean_.SetState(CleanState::kStopped, t, last_distance_);
   if (state_ != MissionState::kFault) Enter(MissionState::kIdle, t, "stopped by request");
   last_cmd_ = {};
 }
@@ -125,8 +144,11 @@ WheelCommand Mission::ToWheels(const Twist& tw, double dt) {
 }
 
 bool Mission::Watchdogs(double t, const slam::Slam& slam) {
-  if (t - started_at_ > options_.max_time_s) {
-    Enter(MissionState::kIdle, t, "mission time limit reached");
+  const bool cleaning = state_ == MissionState::kClean || state_ == MissionState::kReturnHome;
+  if (cleaning ? t - clean_started_ > options_.cleaning.max_time_s
+               : t - started_at_ > options_.max_time_s) {
+    if (cleaning) clean_.SetState(CleanState::kStopped, t, slam.distance_m());
+    Enter(MissionState::kIdle, t, cleaning ? "cleaning time limit reached" : "mission time limit reached");
     return false;
   }
   if (slam.distance_m() > progress_distance_ + options_.progress_step_m) {
@@ -145,6 +167,11 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
                            uint8_t bumpers) {
   // Remember what was hit, so followers and planned paths keep away from it.
   bumps_.Record(slam.pose(), bumpers);
+  last_distance_ = slam.distance_m();
+  if (!home_set_ && state_ != MissionState::kIdle) {
+    home_ = slam.pose();
+    home_set_ = true;
+  }
   const double dt = std::clamp(t - last_t_, 0.0, options_.max_step_s);
   last_t_ = t;
   switch (state_) {
@@ -165,6 +192,10 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
       return StepGoTo(t, dt, slam, scan, bumpers);
     case MissionState::kContourFollow:
       return StepContour(t, dt, slam, scan, bumpers != 0);
+    case MissionState::kClean:
+      return StepClean(t, dt, slam, scan, bumpers);
+    case MissionState::kReturnHome:
+      return StepReturnHome(t, dt, slam, scan, bumpers);
     default:
       return Halt();
   }
@@ -198,14 +229,14 @@ WheelCommand Mission::StepWallFollow(double t, double dt, const slam::Slam& slam
 WheelCommand Mission::StepModel(double t, const slam::Slam& slam) {
   // Paper §5: model the room from the line map, then complete what is incomplete.
   const EnvironmentModel& m = modeler_.Update(slam.map_lines(), slam.map_trajectory());
-  if (!options_.explore) return To(MissionState::kDone, t, "room modelled (exploration off)");
+  if (!options_.explore) return Finish(t, slam, m, "room modelled (exploration off)");
   if (m.pending() == 0 && survey_.Wanted(m) && StartSurvey(t, slam, m)) return Halt();
   if (m.pending() == 0) {
     int complete = 0;
     for (const auto& o : m.objects) complete += o.complete;
-    return To(MissionState::kDone, t,
-              "room modelled: " + std::to_string(m.objects.size()) + " objects, " +
-                  std::to_string(complete) + " complete");
+    return Finish(t, slam, m,
+                  "room modelled: " + std::to_string(m.objects.size()) + " objects, " +
+                      std::to_string(complete) + " complete");
   }
   return GoToObject(t, slam, m);
 }
@@ -311,6 +342,67 @@ WheelCommand Mission::StepContour(double t, double dt, const slam::Slam& slam,
       return To(MissionState::kModel, t, object + ": contour following timed out");
   }
   return Halt();
+}
+
+WheelCommand Mission::Finish(double t, const slam::Slam& slam, const EnvironmentModel& m,
+                             std::string reason) {
+  if (!clean_mode_) return To(MissionState::kDone, t, std::move(reason));
+  // Plan the coverage once, bounded by the room's size, and clean.
+  clean_.Begin(t, slam, m, bumps_);
+  clean_started_ = t;
+  return To(MissionState::kClean, t,
+            "cleaning " + std::to_string(clean_.plan().cells.size()) + " cells");
+}
+
+WheelCommand Mission::StepClean(double t, double dt, const slam::Slam& slam,
+                                const RangeScan& raw_scan, uint8_t bumpers) {
+  const Clean::Result r = clean_.Step(t, slam, raw_scan, bumpers, bumps_, follower_);
+  if (r.status == Clean::Status::kCleaning) return ToWheels(r.twist, dt);
+  clean_.SetState(CleanState::kReturning, t, slam.distance_m());
+  const CleaningProgress p = clean_.Progress(t, slam.distance_m());
+  const auto one_decimal = [](double v) {
+    const long k = std::lround(std::max(0.0, v) * 10);
+    return std::to_string(k / 10) + "." + std::to_string(k % 10);
+  };
+  clean_summary_ = "cleaned " + std::to_string(p.cells_done) + " of " + std::to_string(p.cells_total) +
+                   " cells, " + one_decimal(p.covered_m2) + " of " + one_decimal(p.total_m2) + " m2";
+  home_planned_ = false;
+  home_attempts_ = 0;
+  home_retry_t_ = t;
+  return To(MissionState::kReturnHome, t, clean_summary_ + "; returning home");
+}
+
+WheelCommand Mission::StepReturnHome(double t, double dt, const slam::Slam& slam,
+                                     const RangeScan& raw_scan, uint8_t bumpers) {
+  if (!home_planned_) {
+    // One plan per period, and after a failure not for a while.
+    if (t < home_retry_t_) return Halt();
+    home_retry_t_ = t + 2.0;
+    if (home_go_to_.TryGoal({home_.x, home_.y}, home_.theta, true, slam, bumps_)) {
+      home_go_to_.Begin(t);
+      home_planned_ = true;
+    } else if (++home_attempts_ >= options_.cleaning.home_attempts) {
+      clean_.SetState(CleanState::kDone, t, slam.distance_m());
+      return To(MissionState::kDone, t, clean_summary_ + "; home: no way found");
+    }
+    return Halt();
+  }
+  const GoTo::Result r = home_go_to_.Step(t, slam, raw_scan, bumpers, bumps_, follower_);
+  switch (r.status) {
+    case GoTo::Status::kDriving:
+      return ToWheels(r.twist, dt);
+    case GoTo::Status::kGiveUp:
+      home_planned_ = false;
+      if (++home_attempts_ >= options_.cleaning.home_attempts) {
+        clean_.SetState(CleanState::kDone, t, slam.distance_m());
+        return To(MissionState::kDone, t, clean_summary_ + "; home: " + r.why);
+      }
+      return Halt();
+    case GoTo::Status::kArrived:
+      break;
+  }
+  clean_.SetState(CleanState::kDone, t, slam.distance_m());
+  return To(MissionState::kDone, t, clean_summary_ + ", back home");
 }
 
 }  // namespace irslam::control

@@ -24,10 +24,16 @@
 //   complete ..." contour_follow  all round, free sides, timeout       model           "object n
 //   incomplete ..." (given up)
 //
-// Room for the next behaviours (not implemented): clean, return_home and
-// relocalize each become a behaviour class beside these, a MissionState (new
-// values after kFault: the heartbeat carries the number), a Step* case in
-// Mission::Step and their rows above.
+//   model           done as above, mode clean                clean           "cleaning n cells"
+//   clean           every cell swept or given up             return_home     "cleaned: ..."
+//   return_home     at the start pose                        done            "cleaned ..., back home"
+//   return_home     no way home after home_attempts plans    done            "cleaned ...; home: why"
+// (clean and return_home: time limit [cleaning].max_time_s from entering clean.)
+//
+// Room for the next behaviours (not implemented): relocalize becomes a
+// behaviour class beside these, a MissionState (new values after kReturnHome:
+// the heartbeat carries the number), a Step* case in Mission::Step and its rows
+// above.
 #ifndef IRSLAM_CONTROL_MISSION_H_
 #define IRSLAM_CONTROL_MISSION_H_
 
@@ -36,6 +42,7 @@
 #include <vector>
 
 #include "control/bump_memory.h"
+#include "control/clean.h"
 #include "control/contour_follow.h"
 #include "control/go_to.h"
 #include "control/loop_detector.h"
@@ -58,7 +65,9 @@ enum class MissionState : uint8_t {
   kContourFollow = 4,
   kDone = 5,
   kFault = 6,
-  // Next: kClean, kReturnHome, kRelocalize.
+  kClean = 7,
+  kReturnHome = 8,
+  // Next: kRelocalize.
 };
 const char* ToString(MissionState s);
 
@@ -72,6 +81,8 @@ struct MissionOptions {
   double max_step_s = 0.1;          // longest control step used for the acceleration limit
   LoopOptions loop;                 // [mission] too
   BumpMemoryOptions bump;           // [mission] too
+  std::string mode = "explore";     // explore: map the room; clean: map, clean, go home
+  CleaningOptions cleaning;         // [cleaning]
 };
 options::Table<MissionOptions> MissionKeys();
 
@@ -88,6 +99,9 @@ class Mission {
           ModelOptions model, const slam::SlamOptions& slam);
 
   bool Start(double t, std::string* why);
+  // The mode of the next start (the configured one until set): cleaning or not.
+  void SetCleanMode(bool clean) { clean_mode_ = clean; }
+  bool clean_mode() const { return clean_mode_; }
   void Stop(double t);
   // Controller lost / back: fault keeps the state to resume.
   void SetFault(double t, const std::string& reason);
@@ -105,6 +119,11 @@ class Mission {
   // The go-to path (internal frame), for status and drawings.
   const std::vector<Eigen::Vector2d>& path() const { return go_to_.path(); }
   double started_at() const { return started_at_; }
+  // Cleaning progress (state none when cleaning never ran since the last start).
+  CleaningProgress cleaning(double t, double distance_m) const {
+    return clean_.Progress(t, distance_m);
+  }
+  const Clean& clean() const { return clean_; }
   // Robot times at which wall-following loops of the room closed.
   const std::vector<double>& loop_times() const { return loop_times_; }
 
@@ -135,6 +154,13 @@ class Mission {
   WheelCommand AbandonGoTo(double t, const std::string& why);
   // Picks the next survey point and starts going there; false if none is left.
   bool StartSurvey(double t, const slam::Slam& slam, const EnvironmentModel& m);
+  // Modelled and explored: done, or in mode clean, plan the cleaning and start it.
+  WheelCommand Finish(double t, const slam::Slam& slam, const EnvironmentModel& m,
+                      std::string reason);
+  WheelCommand StepClean(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
+                         uint8_t bumpers);
+  WheelCommand StepReturnHome(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
+                              uint8_t bumpers);
 
   MissionOptions options_;
   RobotGeometry geometry_;
@@ -147,6 +173,8 @@ class Mission {
   GoTo go_to_;
   ContourFollow contour_;
   Survey survey_;
+  Clean clean_;
+  GoTo home_go_to_;
   // The mission's own state.
   MissionState state_ = MissionState::kIdle;
   MissionState resume_state_ = MissionState::kIdle;
@@ -159,6 +187,16 @@ class Mission {
   double progress_distance_ = 0;
   double progress_t_ = 0;
   WheelCommand last_cmd_;
+  // Cleaning.
+  bool clean_mode_ = false;
+  bool home_set_ = false;
+  Pose2 home_;  // internal frame: where the mission started
+  bool home_planned_ = false;
+  int home_attempts_ = 0;
+  double home_retry_t_ = 0;  // the next plan home not before this
+  double clean_started_ = 0;
+  std::string clean_summary_;
+  double last_distance_ = 0;  // travelled, at the last step
 };
 
 }  // namespace irslam::control

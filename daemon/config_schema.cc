@@ -203,6 +203,9 @@ void WalkConfig(robot::CoreOptions* o, Visitor* v) {
   v->Keys(&o->mission.loop, control::LoopKeys());
   v->Keys(&o->mission.bump, control::BumpMemoryKeys());
   v->End();
+  v->Section("cleaning", "coverage planning and cleaning (mission.mode = \"clean\"; docs/cleaning.md)");
+  v->Keys(&o->mission.cleaning, control::CleaningKeys());
+  v->End();
   v->Section("model", "the room and furniture from the line map (paper section 5)");
   v->Keys(&o->model, control::ModelKeys());
   v->End();
@@ -217,6 +220,8 @@ void WalkConfig(robot::CoreOptions* o, Visitor* v) {
 
 std::string CheckConfig(const robot::CoreOptions& o) {
   if (o.state_dir.empty()) return "state.dir must not be empty";
+  if (o.mission.mode != "explore" && o.mission.mode != "clean")
+    return "mission.mode must be \"explore\" or \"clean\" (got \"" + o.mission.mode + "\")";
   const std::string ir = o.ir.Validate();
   if (!ir.empty()) return ir;
   const auto& a = o.slam.association;

@@ -90,12 +90,49 @@ json LineJson(const slam::LineFeature& l) {
           {"observations", l.observations}};
 }
 
+json PointsJson(const std::vector<Eigen::Vector2d>& pts) {
+  json a = json::array();
+  for (const auto& p : pts) a.push_back({p.x(), p.y()});
+  return a;
+}
+
+// contracts §7: status.cleaning (without cells) and the map's "cleaning" (with them).
+json CleaningJson(const control::CleaningProgress& c, bool cells) {
+  json j = {{"state", ToString(c.state)},
+            {"started_t", c.started_t},
+            {"finished_t", c.finished_t > 0 ? json(c.finished_t) : json()},
+            {"swept_t", c.swept_t > 0 ? json(c.swept_t) : json()},
+            {"cells_done", c.cells_done},
+            {"cells_total", c.cells_total},
+            {"covered_m2", c.covered_m2},
+            {"total_m2", c.total_m2},
+            {"fraction", c.fraction},
+            {"path_m", c.path_m},
+            {"eta_s", c.eta_s},
+            {"unreachable_m2", c.unreachable_m2},
+            {"cross_track_rms_m", c.cross_track_rms_m},
+            {"cross_track_max_m", c.cross_track_max_m},
+            {"width_m", c.cleaning_width_m}};
+  if (cells) {
+    json a = json::array();
+    for (const auto& cell : c.cells) {
+      a.push_back({{"id", cell.id},
+                   {"polygon", PointsJson(cell.polygon)},
+                   {"route", PointsJson(cell.route)},
+                   {"done", cell.done},
+                   {"unreachable", cell.unreachable}});
+    }
+    j["cells"] = a;
+  }
+  return j;
+}
+
 }  // namespace
 
 json ToJson(const robot::CoreStatus& s) {
   json ranges = json::array();
   for (const auto& r : s.ir.scan.range_m) ranges.push_back(r ? json(*r) : json());
-  return {
+  json j = {
       {"state", ToString(s.mission.state)},
       {"reason", s.mission.reason},
       {"behaviour", ToString(s.mission.behaviour)},
@@ -115,6 +152,8 @@ json ToJson(const robot::CoreStatus& s) {
       {"controller", ControllerJson(s.controller)},
       {"frames", FramesJson(s.frames)},
   };
+  if (s.cleaning) j["cleaning"] = CleaningJson(*s.cleaning, false);
+  return j;
 }
 
 json ToJson(const robot::MapSnapshot& m) {
@@ -124,7 +163,7 @@ json ToJson(const robot::MapSnapshot& m) {
   for (const auto& l : m.lines) lines.push_back(LineJson(l));
   json traj = json::array();
   for (const auto& p : m.trajectory) traj.push_back({p.t, p.pose.x, p.pose.y, p.pose.theta});
-  return {
+  json j = {
       {"frame", "map"},
       {"state", ToString(m.state)},
       {"pose", PoseJson(m.pose)},
@@ -134,6 +173,8 @@ json ToJson(const robot::MapSnapshot& m) {
       {"objects", objects},
       {"trajectory", traj},
   };
+  if (m.cleaning) j["cleaning"] = CleaningJson(*m.cleaning, true);
+  return j;
 }
 
 }  // namespace irslam

@@ -14,6 +14,14 @@ RpcMethodTable Daemon::MakeMethods() {
        [this](const rpc::Request& r) { return rpc::MakeResult(r.id, maps_.Serve([this] { return LiveMap(); })); }},
       {"subscribe", Access::kRead, nullptr},  // carried out by the API server
       {"start", Access::kControl, [this](const rpc::Request& r) { return Start(r); }},
+      // contracts §7: start in mode clean.
+      {"clean", Access::kControl,
+       [this](const rpc::Request& r) {
+         rpc::Request c = r;
+         if (!c.params.is_object()) c.params = nlohmann::json::object();
+         c.params["mode"] = "clean";
+         return Start(c);
+       }},
       {"stop", Access::kControl, [this](const rpc::Request& r) { return Stop(r); }},
   });
 }
@@ -23,11 +31,32 @@ nlohmann::json Daemon::Start(const rpc::Request& req) {
   if (foreign_.Present(WallNow())) {
     return rpc::MakeError(req.id, rpc::kRejected, std::string("start rejected: ") + kForeignCommanderReason);
   }
+  // contracts §7: optional {"mode": "explore"|"clean", "fresh": bool}. fresh
+  // (forget the saved map) is accepted: every start explores from nothing today.
+  std::string mode = core_options_.mission.mode;
+  if (req.params.is_object()) {
+    for (const auto& [k, v] : req.params.items()) {
+      if (k == "mode") {
+        if (!v.is_string() || (v != "explore" && v != "clean"))
+          return rpc::MakeError(req.id, rpc::kInvalidParams, "mode must be \"explore\" or \"clean\"");
+        mode = v.get<std::string>();
+      } else if (k == "fresh") {
+        if (!v.is_boolean()) return rpc::MakeError(req.id, rpc::kInvalidParams, "fresh must be true or false");
+      } else {
+        return rpc::MakeError(req.id, rpc::kInvalidParams, "unknown parameter: " + k);
+      }
+    }
+  } else if (!req.params.is_null() && !(req.params.is_array() && req.params.empty())) {
+    return rpc::MakeError(req.id, rpc::kInvalidParams, "params must be an object");
+  }
   ApplyPendingOptions();  // (normally done already when the mission ended)
+  const bool running = core_->state() != control::MissionState::kIdle && core_->state() != control::MissionState::kDone &&
+                       core_->state() != control::MissionState::kFault;
+  if (!running) core_->SetCleanMode(mode == "clean");
   std::string why;
   if (!core_->Start(now, &why)) return rpc::MakeError(req.id, rpc::kRejected, "start rejected: " + why);
   maps_.OnMissionStarted();
-  std::fprintf(stderr, "<6>irslamd: mission started\n");
+  std::fprintf(stderr, "<6>irslamd: mission started (mode %s)\n", mode.c_str());
   return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
 }
 

@@ -1,9 +1,11 @@
 // irslamctl: command-line client of irslamd (contracts.md §3).
-//   irslamctl [--socket PATH] status [--json] | start | stop |
+//   irslamctl [--socket PATH] status [--json] | start [--mode M] [--fresh] | clean | stop |
 //             map [--out map.json] [--svg map.svg] | wait --state STATE [--timeout S] | watch
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <string>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -44,7 +46,21 @@ std::string StatusLine(const nlohmann::json& s) {
                 can.value("rx_dropped", 0ULL) + can.value("tx_dropped", 0ULL),
                 can.value("link_up", false) ? "up" : "DOWN", per.value("jitter_max", 0.0) * 1e3,
                 per.value("overruns", 0ULL));
-  return b;
+  std::string line = b;
+  // Cleaning: a progress bar with the percentage and the time left.
+  if (s.contains("cleaning") && s["cleaning"].is_object()) {
+    const auto& c = s["cleaning"];
+    const double f = std::clamp(c.value("fraction", 0.0), 0.0, 1.0);
+    const int n = static_cast<int>(std::lround(f * 20));
+    const double eta = c.value("eta_s", 0.0);
+    char bar[160];
+    std::snprintf(bar, sizeof bar, " clean [%s%s] %5.1f%% cells %d/%d eta %dm%02ds", std::string(n, '#').c_str(),
+                  std::string(20 - n, '.').c_str(), 100 * f, c.value("cells_done", 0), c.value("cells_total", 0),
+                  static_cast<int>(eta) / 60, static_cast<int>(eta) % 60);
+    line = bar + std::string(" ") + line;
+    line = line.substr(0, line.find(" can rx"));
+  }
+  return line;
 }
 
 void PrintStatus(const nlohmann::json& s) {
@@ -58,6 +74,14 @@ void PrintStatus(const nlohmann::json& s) {
               Num(sd[2]).c_str());
   std::printf("map:        %d lines, %d objects, %s m driven\n", s.value("lines", 0),
               s.value("objects", 0), Num(s.value("distance", 0.0), 1).c_str());
+  if (s.contains("cleaning") && s["cleaning"].is_object()) {
+    const auto& c = s["cleaning"];
+    std::printf("cleaning:   %s, cells %d/%d, %s of %s m2 (%s %%), path %s m, eta %s s, unreachable %s m2\n",
+                c.value("state", "?").c_str(), c.value("cells_done", 0), c.value("cells_total", 0),
+                Num(c.value("covered_m2", 0.0), 2).c_str(), Num(c.value("total_m2", 0.0), 2).c_str(),
+                Num(100 * c.value("fraction", 0.0), 1).c_str(), Num(c.value("path_m", 0.0), 1).c_str(),
+                Num(c.value("eta_s", 0.0), 0).c_str(), Num(c.value("unreachable_m2", 0.0), 2).c_str());
+  }
   const auto& ctl = s.value("controller", nlohmann::json::object());
   std::printf("controller: %s, faults=0x%02x bumpers=0x%02x battery=%s V\n",
               ctl.value("alive", false) ? "alive" : "LOST", ctl.value("faults", 0),
@@ -106,7 +130,14 @@ int main(int argc, char** argv) {
   bool json_out = false;
   auto* status = app.add_subcommand("status", "Show the daemon's status");
   status->add_flag("--json", json_out, "Print the raw JSON");
-  auto* start = app.add_subcommand("start", "Start the mission (exploration)");
+  auto* start = app.add_subcommand("start", "Start the mission (exploration; --mode clean: then clean)");
+  std::string mode;
+  bool fresh = false;
+  start->add_option("--mode", mode, "explore (map only) or clean (map, clean, return to the start); "
+                                    "default: the daemon's mission.mode")
+      ->check(CLI::IsMember({"explore", "clean"}));
+  start->add_flag("--fresh", fresh, "Forget the saved map (every start explores from nothing today)");
+  auto* clean = app.add_subcommand("clean", "Start the mission in mode clean");
   auto* stop = app.add_subcommand("stop", "Stop the robot");
   std::string out_path, svg_path;
   auto* map = app.add_subcommand("map", "Fetch the map");
@@ -115,7 +146,8 @@ int main(int argc, char** argv) {
   std::string want_state;
   double timeout = 0;
   auto* wait = app.add_subcommand("wait", "Wait until the mission reaches a state");
-  wait->add_option("--state", want_state, "idle, wall_follow, model, go_to_p1, contour_follow, done, fault")
+  wait->add_option("--state", want_state,
+                   "idle, wall_follow, model, go_to_p1, contour_follow, clean, return_home, done, fault")
       ->required();
   wait->add_option("--timeout", timeout, "Give up after this many seconds (default: never)");
   auto* watch = app.add_subcommand("watch", "Show state, pose, map and CAN counters live");
@@ -139,8 +171,11 @@ int main(int argc, char** argv) {
     }
     return 0;
   }
-  if (*start || *stop) {
-    auto r = client.Call(*start ? "start" : "stop", nlohmann::json::object(), kCallTimeout, &error);
+  if (*start || *stop || *clean) {
+    nlohmann::json params = nlohmann::json::object();
+    if (*start && !mode.empty()) params["mode"] = mode;
+    if (*start && fresh) params["fresh"] = true;
+    auto r = client.Call(*start ? "start" : (*clean ? "clean" : "stop"), params, kCallTimeout, &error);
     if (!r) return Fail(error);
     std::printf("state: %s\n", r->value("state", "?").c_str());
     return 0;

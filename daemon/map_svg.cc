@@ -109,6 +109,45 @@ std::string RenderMapSvg(const nlohmann::json& map, const nlohmann::json& truth,
     }
     c.Poly(pts, color, width);
   };
+  const bool cleaning = map.is_object() && map.contains("cleaning") && map["cleaning"].is_object();
+  if (cleaning) {
+    // Cleaning (contracts §7): the floor swept (the estimated path during cleaning,
+    // as wide as the cleaning width), each cell's outline and its route.
+    const auto& cl = map["cleaning"];
+    const double t0 = cl.value("started_t", 0.0);
+    const double t1 = cl["finished_t"].is_number() ? cl["finished_t"].get<double>() : 1e18;
+    std::vector<std::pair<double, double>> swept;
+    for (const auto& p : map.value("trajectory", nlohmann::json::array())) {
+      if (p[0].get<double>() < t0 || p[0].get<double>() > t1) continue;
+      double x, y;
+      xf.Apply(p[1].get<double>(), p[2].get<double>(), &x, &y);
+      swept.emplace_back(x, y);
+    }
+    std::ostringstream w;
+    w << cl.value("width_m", 0.34);
+    const std::string width = w.str();
+    std::ostringstream sw;
+    sw << "<polyline fill='none' stroke='rgba(60,190,110,0.25)' stroke-width='" << width
+       << "' stroke-linecap='round' stroke-linejoin='round' points='";
+    for (const auto& [x, y] : swept) sw << x << "," << -y << " ";
+    sw << "'/>\n";
+    c.Raw(sw.str());
+    const auto to_pts = [&](const nlohmann::json& a) {
+      std::vector<std::pair<double, double>> pts;
+      for (const auto& q : a) {
+        double x, y;
+        xf.Apply(q[0].get<double>(), q[1].get<double>(), &x, &y);
+        pts.emplace_back(x, y);
+      }
+      return pts;
+    };
+    for (const auto& cell : cl.value("cells", nlohmann::json::array())) {
+      const bool done = cell.value("done", false);
+      c.Poly(to_pts(cell.value("polygon", nlohmann::json::array())),
+             done ? "#2a6" : (cell.value("unreachable", false) ? "#c33" : "#aaa"), 0.01, "none", true);
+      c.Poly(to_pts(cell.value("route", nlohmann::json::array())), "#888", 0.006);
+    }
+  }
   if (have_truth) {
     draw_traj(truth.value("odometry", nlohmann::json::array()), "#2a2", 0.012, false);
     draw_traj(truth["trajectory"], "#d22", 0.012, false);
@@ -155,6 +194,7 @@ std::string RenderMapSvg(const nlohmann::json& map, const nlohmann::json& truth,
   }
   std::string legend = "black: mapped lines (magenta: 3-sigma), blue: SLAM trajectory";
   if (have_truth) legend += ", red: true trajectory, green: odometry";
+  if (cleaning) legend += ", cleaning: cells (green done, red unreachable), routes (grey), swept floor (light green)";
   if (map.is_object()) legend += " | state: " + map.value("state", std::string("?"));
   return c.Finish(legend);
 }

@@ -67,7 +67,9 @@ bool RobotCore::MotorEnable() const {
     case MissionState::kWallFollow:
     case MissionState::kModel:
     case MissionState::kGoToP1:
-    case MissionState::kContourFollow: return true;
+    case MissionState::kContourFollow:
+    case MissionState::kClean:
+    case MissionState::kReturnHome: return true;
     default: return false;
   }
 }
@@ -148,13 +150,16 @@ CoreStatus RobotCore::Status(double now_s) const {
   s.safety = {estop_.active(), estop_latched_, bump_left_.active(), bump_right_.active(), MotorEnable()};
   s.controller = {motor_.ControllerAlive(now_s), motor_.last_status()};
   s.frames = {motor_.counters(), ir_.counters()};
+  if (mission_.clean().active()) s.cleaning = mission_.cleaning(now_s, slam_.distance_m());
   return s;
 }
 
 MapSnapshot RobotCore::Map() const {
   const control::EnvironmentModel& model = mission_.model();
-  return {mission_.state(),    slam_.map_pose(), slam_.map_pose_cov(),     slam_.map_lines(),
-          model.room,          model.objects,    slam_.map_trajectory()};
+  MapSnapshot m{mission_.state(),    slam_.map_pose(), slam_.map_pose_cov(),     slam_.map_lines(),
+                model.room,          model.objects,    slam_.map_trajectory(), std::nullopt};
+  if (mission_.clean().active()) m.cleaning = mission_.cleaning(slam_.time(), slam_.distance_m());
+  return m;
 }
 
 }  // namespace irslam::robot

@@ -73,6 +73,8 @@ class RobotCore {
   std::vector<can_frame> Tick(double now_s);
 
   bool Start(double now_s, std::string* why);
+  // The mode of the next start: clean (explore, clean, go home) or explore only.
+  void SetCleanMode(bool clean) { mission_.SetCleanMode(clean); }
   void Stop(double now_s);
   // Frames that stop the wheels at once (used on stop and shutdown).
   can_frame StopFrame();

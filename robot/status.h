@@ -79,6 +79,8 @@ struct CoreStatus {
   SafetyStatus safety;
   ControllerLink controller;
   FrameCounters frames;
+  // Present when cleaning ran since the last start (contracts §7).
+  std::optional<control::CleaningProgress> cleaning;
 };
 
 // The map as the API serves it (map frame: the first wall along x).
@@ -90,6 +92,7 @@ struct MapSnapshot {
   control::RoomModel room;
   std::vector<control::ObjectModel> objects;
   std::vector<TimedPose> trajectory;  // the corrected estimate
+  std::optional<control::CleaningProgress> cleaning;  // when cleaning ran since the last start
 };
 
 }  // namespace irslam::robot

@@ -53,6 +53,7 @@ struct Common {
   std::optional<uint64_t> seed;
   std::string truth_out;
   std::string faults;  // --faults SPEC (sim/faults.h, docs/reliability.md)
+  std::string mode;    // run --mode explore|clean ("": the config's mission.mode)
 };
 
 bool Load(const Common& c, World* world, robot::CoreOptions* core, uint64_t* seed) {
@@ -67,6 +68,7 @@ bool Load(const Common& c, World* world, robot::CoreOptions* core, uint64_t* see
     std::fprintf(stderr, "irslam-sim: %s\n", error.c_str());
     return false;
   }
+  if (!c.mode.empty()) core->mission.mode = c.mode;
   *world = *w;
   *seed = c.seed.value_or(w->seed.value_or(1));
   return true;
@@ -96,6 +98,11 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
   uint64_t seed;
   FaultSpec faults;
   if (!Load(c, &world, &core_opts, &seed) || !LoadFaults(c, &faults)) return kExitUsage;
+  // Cleaning has its own time budget after the exploration's.
+  if (max_time <= 0) {
+    max_time = core_opts.mission.max_time_s +
+               (core_opts.mission.mode == "clean" ? core_opts.mission.cleaning.max_time_s : 0);
+  }
   // Optional outputs (an empty path: not asked for).
   const auto open_out = [](const std::string& path, std::ofstream* out) {
     if (path.empty()) return true;
@@ -178,6 +185,17 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
   if (run.faults) {
     std::fprintf(stderr, "irslam-sim: injected %s; irslamd's frame counters: %s\n",
                  FaultsJson(run.faults->counters()).dump().c_str(), status["frames"].dump().c_str());
+  }
+  if (status.contains("cleaning")) {
+    const auto& cl = status["cleaning"];
+    std::fprintf(stderr,
+                 "irslam-sim: cleaning %s: %d of %d cells, %.2f of %.2f m2 (%.1f %%, estimated), "
+                 "%.1f m path, %.2f m2 unreachable, cross-track rms %.3f m\n",
+                 cl["state"].get<std::string>().c_str(), cl["cells_done"].get<int>(),
+                 cl["cells_total"].get<int>(), cl["covered_m2"].get<double>(),
+                 cl["total_m2"].get<double>(), 100 * cl["fraction"].get<double>(),
+                 cl["path_m"].get<double>(), cl["unreachable_m2"].get<double>(),
+                 cl["cross_track_rms_m"].get<double>());
   }
   if (core.state() != control::MissionState::kDone) {
     std::fprintf(stderr, "irslam-sim: mission did not finish: state %s, %s\n",
@@ -291,9 +309,15 @@ int main(int argc, char** argv) {
   };
   auto* run = app.add_subcommand("run", "Run the whole mission in process, as fast as possible");
   add_common(run);
-  double max_time = 900;
+  double max_time = 0;
   std::string map_out;
-  run->add_option("--max-time", max_time, "Robot-time limit in seconds")->check(CLI::PositiveNumber);
+  run->add_option("--max-time", max_time,
+                  "Robot-time limit in seconds (default: mission.max_time_s, plus "
+                  "cleaning.max_time_s in mode clean)")
+      ->check(CLI::PositiveNumber);
+  run->add_option("--mode", common.mode,
+                  "explore: map the room (default); clean: map it, clean it, return to the start")
+      ->check(CLI::IsMember({"explore", "clean"}));
   run->add_option("--map-out", map_out, "Write the map here (contracts §4)");
   std::string svg_out, lines_out, events_out;
   run->add_option("--svg", svg_out, "Draw the map, the true room and trajectories as SVG");

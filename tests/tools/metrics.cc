@@ -240,4 +240,120 @@ ObjectScores ScoreObjects(const nlohmann::json& map, const slam::Slam& slam,
   return sc;
 }
 
+namespace {
+
+bool InsideOutline(const std::vector<sim::Vec2>& poly, double x, double y) {
+  bool in = false;
+  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    const auto& a = poly[i];
+    const auto& b = poly[j];
+    if ((a.y > y) != (b.y > y) && x < (b.x - a.x) * (y - a.y) / (b.y - a.y) + a.x) in = !in;
+  }
+  return in;
+}
+
+}  // namespace
+
+CoverageScore ScoreCoverage(const sim::World& world, double radius_m, const std::vector<TimedPose>& truth,
+                            double t0, double t1, double cell_m, std::vector<std::pair<double, double>>* curve,
+                            double sample_s) {
+  CoverageScore out;
+  const sim::Box r = world.Bounds();
+  const int nx = static_cast<int>(std::ceil((r.xmax - r.xmin) / cell_m));
+  const int ny = static_cast<int>(std::ceil((r.ymax - r.ymin) / cell_m));
+  if (nx <= 0 || ny <= 0) return out;
+  const auto idx = [nx](int i, int j) { return static_cast<size_t>(j) * static_cast<size_t>(nx) + static_cast<size_t>(i); };
+  const auto cx = [&](int i) { return r.xmin + (i + 0.5) * cell_m; };
+  const auto cy = [&](int j) { return r.ymin + (j + 0.5) * cell_m; };
+  // Free floor, and where the body's centre may be (radius from every wall and side).
+  const std::vector<sim::Segment> segs = world.Segments();
+  std::vector<uint8_t> floor(idx(0, ny), 0), centre(idx(0, ny), 0);
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      const double x = cx(i), y = cy(j);
+      if (!InsideOutline(world.outline, x, y)) continue;
+      bool in_object = false;
+      for (const auto& b : world.objects) in_object = in_object || (x > b.xmin && x < b.xmax && y > b.ymin && y < b.ymax);
+      if (in_object) continue;
+      floor[idx(i, j)] = 1;
+      double d = 1e9;
+      sim::Vec2 c;
+      for (const auto& s : segs) d = std::min(d, sim::PointSegmentDistance({x, y}, s, &c));
+      centre[idx(i, j)] = d >= radius_m;
+    }
+  }
+  // The centres reachable from the start (4-connected), and the floor their discs cover.
+  const int si = std::clamp(static_cast<int>((world.start.x - r.xmin) / cell_m), 0, nx - 1);
+  const int sj = std::clamp(static_cast<int>((world.start.y - r.ymin) / cell_m), 0, ny - 1);
+  std::vector<uint8_t> reach(idx(0, ny), 0);
+  std::vector<std::pair<int, int>> stack;
+  // The start itself may sit a little inside the radius on a rasterised grid: take the nearest centre cell.
+  int best_i = si, best_j = sj;
+  double best = 1e9;
+  for (int j = std::max(0, sj - 5); j <= std::min(ny - 1, sj + 5); ++j)
+    for (int i = std::max(0, si - 5); i <= std::min(nx - 1, si + 5); ++i)
+      if (centre[idx(i, j)] && std::hypot(i - si, j - sj) < best) best = std::hypot(i - si, j - sj), best_i = i, best_j = j;
+  if (best < 1e9) {
+    stack.push_back({best_i, best_j});
+    reach[idx(best_i, best_j)] = 1;
+  }
+  while (!stack.empty()) {
+    const auto [i, j] = stack.back();
+    stack.pop_back();
+    const int di[4] = {1, -1, 0, 0}, dj[4] = {0, 0, 1, -1};
+    for (int k = 0; k < 4; ++k) {
+      const int a = i + di[k], b = j + dj[k];
+      if (a < 0 || b < 0 || a >= nx || b >= ny || reach[idx(a, b)] || !centre[idx(a, b)]) continue;
+      reach[idx(a, b)] = 1;
+      stack.push_back({a, b});
+    }
+  }
+  const int rc = static_cast<int>(std::ceil(radius_m / cell_m));
+  std::vector<uint8_t> target(idx(0, ny), 0);
+  const auto stamp = [&](std::vector<uint8_t>* grid, double x, double y, long* count, const std::vector<uint8_t>* only) {
+    const int i0 = static_cast<int>((x - r.xmin) / cell_m), j0 = static_cast<int>((y - r.ymin) / cell_m);
+    for (int j = std::max(0, j0 - rc); j <= std::min(ny - 1, j0 + rc); ++j) {
+      for (int i = std::max(0, i0 - rc); i <= std::min(nx - 1, i0 + rc); ++i) {
+        const size_t k = idx(i, j);
+        if ((*grid)[k] || !floor[k] || (only && !(*only)[k])) continue;
+        if (std::hypot(cx(i) - x, cy(j) - y) > radius_m) continue;
+        (*grid)[k] = 1;
+        if (count) ++*count;
+      }
+    }
+  };
+  long n_target = 0;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      if (reach[idx(i, j)]) stamp(&target, cx(i), cy(j), &n_target, nullptr);
+  std::vector<uint8_t> covered(idx(0, ny), 0);
+  long n_covered = 0;
+  double next_sample = t0;
+  const TimedPose* last = nullptr;
+  for (const auto& p : truth) {
+    if (p.t < t0 || p.t > t1) continue;
+    if (last) out.path_m += std::hypot(p.pose.x - last->pose.x, p.pose.y - last->pose.y);
+    // Between samples farther apart than half a cell, fill in.
+    const int steps = last ? std::max(1, static_cast<int>(std::hypot(p.pose.x - last->pose.x, p.pose.y - last->pose.y) /
+                                                          (0.5 * cell_m)))
+                           : 1;
+    for (int k = 1; k <= steps; ++k) {
+      const double f = static_cast<double>(k) / steps;
+      const double x = last ? last->pose.x + f * (p.pose.x - last->pose.x) : p.pose.x;
+      const double y = last ? last->pose.y + f * (p.pose.y - last->pose.y) : p.pose.y;
+      stamp(&covered, x, y, &n_covered, &target);
+    }
+    last = &p;
+    if (curve && p.t >= next_sample) {
+      curve->emplace_back(p.t - t0, n_target ? static_cast<double>(n_covered) / n_target : 0);
+      next_sample += sample_s;
+    }
+  }
+  out.reachable_m2 = n_target * cell_m * cell_m;
+  out.covered_m2 = n_covered * cell_m * cell_m;
+  out.fraction = n_target ? static_cast<double>(n_covered) / n_target : 0;
+  if (curve) curve->emplace_back(t1 - t0, out.fraction);
+  return out;
+}
+
 }  // namespace irslam::metrics

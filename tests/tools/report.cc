@@ -13,6 +13,7 @@
 #include "daemon/config.h"
 #include "sim/sim_run.h"
 #include "tests/tools/campaign.h"
+#include "tests/tools/clean_report.h"
 #include "tests/tools/metrics.h"
 #include "tests/tools/svg_chart.h"
 
@@ -154,6 +155,11 @@ int main(int argc, char** argv) {
   app.add_option("--profiles", profiles, "Campaign noise profiles, comma-separated (nominal,realistic,harsh)");
   app.add_option("--first-seed", first_seed, "Campaign: the first world seed");
   app.add_option("--jobs", jobs, "Campaign: runs in parallel")->check(CLI::Range(1, 64));
+  std::string mode = "explore";
+  app.add_option("--mode", mode,
+                 "clean: the cleaning report instead (cleaning-results.md, cleaning-coverage.svg in --out): the "
+                 "paper worlds x --seeds, plus --campaign N generated worlds per profile; docs/cleaning.md")
+      ->check(CLI::IsMember({"explore", "clean"}));
   CLI11_PARSE(app, argc, argv);
   robot::CoreOptions defaults = robot::DefaultCoreOptions();
   if (!config_path.empty()) {
@@ -164,6 +170,11 @@ int main(int argc, char** argv) {
     }
   }
 
+  if (mode == "clean") {
+    return RunCleanReport(defaults, worlds_dir,
+                          {"fig14", "fig16", "fig17", "fig18", "fig19", "fig20", "free_start", "corner_start"},
+                          seeds, campaign_runs, profiles, first_seed, jobs, out_dir);
+  }
   if (campaign_runs > 0) return RunCampaignReport(defaults, profiles, first_seed, campaign_runs, jobs, out_dir);
 
   const auto load = [&](const std::string& name) {

@@ -56,12 +56,14 @@ std::map<std::string, Seen> AllKeys() {
   Check(ContourKeys(), "exploration", &keys);
   Check(SurveyKeys(), "exploration", &keys);
   Check(ModelKeys(), "model", &keys);
+  Check(CleaningKeys(), "cleaning", &keys);
   return keys;
 }
 
 TEST(ControlOptionsTest, TablesAreConsistent) {
   const auto keys = AllKeys();
-  EXPECT_EQ(keys.size(), 13u + 7 + 5 + 6 + 33 + 2 + 6 + 13 + 5);
+  // mission: 7 + mode; cleaning: 24.
+  EXPECT_EQ(keys.size(), 13u + 8 + 5 + 6 + 33 + 2 + 6 + 13 + 5 + 24);
 }
 
 // The keys config.cc read before the tables, with their bounds.

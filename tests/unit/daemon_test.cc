@@ -86,10 +86,11 @@ class DaemonTest : public ::testing::Test {
       std::this_thread::sleep_for(milliseconds(5));
     }
   }
-  nlohmann::json Call(const std::string& method) {
+  nlohmann::json Call(const std::string& method, nlohmann::json params = nlohmann::json::object()) {
     rpc::Request r;
     r.id = 1;
     r.method = method;
+    r.params = std::move(params);
     PeerCred self;
     self.uid = ::getuid();
     self.gid = ::getgid();
@@ -176,7 +177,7 @@ TEST_F(DaemonTest, MethodTableHoldsTheAccessRuleOfEveryMethod) {
   for (const auto& m : daemon_->methods().methods()) rules[m.name] = m.access;
   const std::map<std::string, Access> expected = {{"status", Access::kRead},    {"map", Access::kRead},
                                                   {"subscribe", Access::kRead}, {"start", Access::kControl},
-                                                  {"stop", Access::kControl}};
+                                                  {"stop", Access::kControl},   {"clean", Access::kControl}};
   EXPECT_EQ(rules, expected);
   EXPECT_EQ(daemon_->methods().Needs("no-such-method"), Access::kRead);
   // A stranger (uid 4242, in group 777 = the read group only).
@@ -196,7 +197,7 @@ TEST_F(DaemonTest, MethodTableHoldsTheAccessRuleOfEveryMethod) {
   };
   EXPECT_TRUE(call("status", reader).contains("result"));
   EXPECT_TRUE(call("map", reader).contains("result"));
-  for (const char* m : {"start", "stop"}) {
+  for (const char* m : {"start", "stop", "clean"}) {
     const auto reply = call(m, reader);
     ASSERT_TRUE(reply.contains("error")) << m;
     EXPECT_EQ(reply["error"]["code"], rpc::kAccessDenied);
@@ -286,6 +287,27 @@ TEST_F(DaemonTest, ASecondCommanderOnTheBusFaultsTheMission) {
   ASSERT_TRUE(again.contains("error"));
   EXPECT_EQ(again["error"]["message"].get<std::string>().rfind("start rejected: controller not reachable", 0), 0u)
       << again;
+}
+
+// Issue 13 (contracts §7): start's optional params are checked before anything else.
+TEST_F(DaemonTest, StartRejectsABadModeOrUnknownParams) {
+  Open();
+  const auto bad_mode = Call("start", {{"mode", "mop"}});
+  ASSERT_TRUE(bad_mode.contains("error")) << bad_mode;
+  EXPECT_EQ(bad_mode["error"]["code"], rpc::kInvalidParams);
+  const auto bad_fresh = Call("start", {{"fresh", "yes"}});
+  ASSERT_TRUE(bad_fresh.contains("error")) << bad_fresh;
+  EXPECT_EQ(bad_fresh["error"]["code"], rpc::kInvalidParams);
+  const auto unknown = Call("start", {{"speed", 2}});
+  ASSERT_TRUE(unknown.contains("error")) << unknown;
+  EXPECT_EQ(unknown["error"]["code"], rpc::kInvalidParams);
+  // Good params get as far as the controller check (none is on this bus).
+  for (const char* m : {"start", "clean"}) {
+    const auto r = Call(m, std::string(m) == "start" ? nlohmann::json{{"mode", "clean"}, {"fresh", true}}
+                                                     : nlohmann::json::object());
+    ASSERT_TRUE(r.contains("error")) << r;
+    EXPECT_EQ(r["error"]["code"], rpc::kRejected) << r;
+  }
 }
 
 // Issue 12 B5: a bad config on SIGHUP changes nothing and says so in one line.

@@ -1,0 +1,277 @@
+#include "control/clean.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace irslam::control {
+
+const char* ToString(CleanState s) {
+  switch (s) {
+    case CleanState::kNone:
+      return "none";
+    case CleanState::kCleaning:
+      return "cleaning";
+    case CleanState::kReturning:
+      return "returning";
+    case CleanState::kDone:
+      return "done";
+    case CleanState::kStopped:
+      return "stopped";
+  }
+  return "?";
+}
+
+GoToOptions CleaningGoTo(GoToOptions g, const CleaningOptions& c) {
+  g.clearance_m = std::max(0.0, c.clearance_m - 0.02);
+  // Below the clearance, so a start inside it can still be left.
+  g.hard_clearance_m = std::min(g.hard_clearance_m, 0.5 * g.clearance_m);
+  g.front_stop_m = 0.1;
+  return g;
+}
+
+void Clean::Reset() {
+  progress_ = {};
+  plan_ = {};
+  grid_ = {};
+  phase_ = Phase::kDone;
+}
+
+Clean::Clean(CleaningOptions options, GoToOptions go_to, const RobotGeometry& geometry,
+             const std::array<SensorMount, kNumIrSensors>& mounts)
+    : options_(options),
+      radius_m_(geometry.radius_m),
+      mounts_(mounts),
+      go_to_(CleaningGoTo(go_to, options), geometry, mounts) {}
+
+void Clean::Begin(double t, const slam::Slam& slam, const EnvironmentModel& m,
+                  const BumpMemory& bumps) {
+  progress_ = {};
+  progress_.state = CleanState::kCleaning;
+  progress_.started_t = t;
+  progress_.cleaning_width_m = options_.cleaning_width_m;
+  plan_ = {};
+  const double rot = slam.map_rotation();
+  if (m.room.box) {
+    std::vector<Box> objects;
+    for (const auto& o : m.objects) objects.push_back(o.box);
+    std::vector<Eigen::Vector2d> contacts;
+    for (const auto& p : bumps.points()) contacts.push_back(RotateVector(p, rot));
+    const Pose2 me = slam.map_pose();
+    plan_ = PlanCoverage(*m.room.box, objects, contacts, {me.x, me.y}, radius_m_, options_);
+    grid_.Init(*m.room.box, plan_.FreeRects(), 0.5 * options_.cleaning_width_m,
+               options_.coverage_cell_m);
+  }
+  for (size_t i = 0; i < plan_.order.size(); ++i) {
+    const CoverageCell& c = plan_.cells[static_cast<size_t>(plan_.order[i])];
+    std::vector<Eigen::Vector2d> outline = c.Outline(0.5 * options_.cleaning_width_m);
+    if (plan_.swapped) {
+      for (auto& p : outline) p = Eigen::Vector2d(p.y(), p.x());
+      std::reverse(outline.begin(), outline.end());  // counter-clockwise again
+    }
+    progress_.cells.push_back({c.id, std::move(outline), plan_.routes[i], false, false});
+  }
+  progress_.cells_total = static_cast<int>(plan_.order.size());
+  progress_.total_m2 = grid_.total_m2();
+  cell_ = 0;
+  point_ = 0;
+  failures_ = 0;
+  start_distance_ = slam.distance_m();
+  cross_sq_ = 0;
+  cross_n_ = 0;
+  phase_ = plan_.order.empty() ? Phase::kDone : Phase::kPlanGoal;
+  progress_t_ = t;
+  progress_at_ = {slam.map_pose().x, slam.map_pose().y};
+}
+
+void Clean::SetState(CleanState s, double t, double distance_m) {
+  if (progress_.state == CleanState::kNone) return;
+  if (progress_.state == CleanState::kCleaning) progress_.path_m = distance_m - start_distance_;
+  progress_.state = s;
+  if (s == CleanState::kReturning) progress_.swept_t = t;
+  if (s == CleanState::kDone || s == CleanState::kStopped) progress_.finished_t = t;
+}
+
+double Clean::RemainingRoute() const {
+  double rest = 0;
+  for (size_t c = cell_; c < plan_.routes.size(); ++c) {
+    const auto& r = plan_.routes[c];
+    for (size_t k = (c == cell_ ? std::max<size_t>(point_, 1) : 1); k < r.size(); ++k)
+      rest += (r[k] - r[k - 1]).norm();
+  }
+  return rest;
+}
+
+double Clean::AreaShare(double length_m) const {
+  const auto& r = plan_.routes[cell_];
+  double all = 0;
+  for (size_t k = 1; k < r.size(); ++k) all += (r[k] - r[k - 1]).norm();
+  const double area = plan_.cells[static_cast<size_t>(plan_.order[cell_])].area_m2();
+  return all > 0 ? area * length_m / all : 0;
+}
+
+void Clean::NextCell(bool unreachable) {
+  if (cell_ >= plan_.routes.size()) return;
+  auto& pc = progress_.cells[cell_];
+  if (unreachable) {
+    // The rest of the route, not swept: its share of the cell's area.
+    const auto& r = plan_.routes[cell_];
+    for (size_t k = std::max<size_t>(point_, 1); k < r.size(); ++k)
+      progress_.unreachable_m2 += AreaShare((r[k] - r[k - 1]).norm());
+    pc.unreachable = true;
+  } else {
+    pc.done = true;
+    ++progress_.cells_done;
+  }
+  ++cell_;
+  point_ = 0;
+  failures_ = 0;
+  phase_ = cell_ < plan_.routes.size() ? Phase::kPlanGoal : Phase::kDone;
+}
+
+void Clean::SkipPoint() {
+  // The segment to the point given up is not swept.
+  const auto& r = plan_.routes[cell_];
+  if (point_ >= 1 && point_ < r.size())
+    progress_.unreachable_m2 += AreaShare((r[point_] - r[point_ - 1]).norm());
+  ++failures_;
+  ++point_;
+  if (failures_ >= options_.max_goal_failures || point_ >= plan_.routes[cell_].size()) {
+    NextCell(true);
+  } else {
+    phase_ = Phase::kPlanGoal;
+  }
+}
+
+Twist Clean::Follow(const Pose2& me, const RangeScan& scan, bool* blocked, bool* passed) {
+  const auto& o = options_;
+  const auto& r = plan_.routes[cell_];
+  const Eigen::Vector2d a = r[point_ - 1], b = r[point_];
+  const Eigen::Vector2d p(me.x, me.y);
+  const Eigen::Vector2d d = b - a;
+  const double len = d.norm();
+  const Eigen::Vector2d u = len > 1e-9 ? Eigen::Vector2d(d / len) : Eigen::Vector2d(1, 0);
+  const double along = (p - a).dot(u);
+  const double cross = u.x() * (p - a).y() - u.y() * (p - a).x();  // > 0: left of the lane
+  if (along >= len - o.waypoint_tolerance_m || (p - b).norm() < o.waypoint_tolerance_m) {
+    *passed = true;
+    return {0, 0};
+  }
+  const double want = std::atan2(u.y(), u.x()) - std::atan(o.k_cross * cross);
+  const double err = NormalizeAngle(want - me.theta);
+  if (std::abs(err) > o.turn_in_place_rad)
+    return {0, std::clamp(o.k_heading * err, -o.max_rate_rad_s, o.max_rate_rad_s)};
+  cross_sq_ += cross * cross;
+  ++cross_n_;
+  progress_.cross_track_max_m = std::max(progress_.cross_track_max_m, std::abs(cross));
+  // Something ahead the map does not have, nearer than where this segment ends.
+  const double rest = len - along;
+  for (int i = 0; i < kNumIrSensors; ++i) {
+    if (!scan.range_m[i]) continue;
+    const auto& m = mounts_[i];
+    const double hx = m.x + *scan.range_m[i] * std::cos(m.theta);
+    const double hy = m.y + *scan.range_m[i] * std::sin(m.theta);
+    if (hx > 0 && std::abs(hy) < radius_m_ && hx < radius_m_ + o.front_stop_m &&
+        hx < rest + radius_m_ + o.clearance_m - 0.05)
+      *blocked = true;
+  }
+  const double v = std::min(o.sweep_speed_mps * std::cos(err), o.approach_gain * rest + 0.03);
+  return {std::max(0.0, v), std::clamp(o.k_heading * err, -o.max_rate_rad_s, o.max_rate_rad_s)};
+}
+
+Clean::Result Clean::Step(double t, const slam::Slam& slam, const RangeScan& raw_scan,
+                          uint8_t bumpers, const BumpMemory& bumps, const WallFollower& follower) {
+  const Pose2 me = slam.map_pose();
+  grid_.Mark({me.x, me.y});
+  const double rot = slam.map_rotation();
+  // Stuck (turning on the spot, or planning and blocked in turn): give the route
+  // point up, so nothing is retried forever.
+  if ((Eigen::Vector2d(me.x, me.y) - progress_at_).norm() > 0.1) {
+    progress_at_ = {me.x, me.y};
+    progress_t_ = t;
+  } else if (phase_ != Phase::kDone && t - progress_t_ > options_.stuck_s) {
+    progress_t_ = t;
+    SkipPoint();
+    return {};
+  }
+  switch (phase_) {
+    case Phase::kDone:
+      return {Status::kDone, {}};
+    case Phase::kPlanGoal: {
+      // One plan per period at most.
+      const Eigen::Vector2d goal = plan_.routes[cell_][point_];
+      if ((goal - Eigen::Vector2d(me.x, me.y)).norm() < 2 * options_.waypoint_tolerance_m) {
+        ++point_;
+        phase_ = Phase::kSweep;
+        if (point_ >= plan_.routes[cell_].size()) NextCell(false);
+        return {};
+      }
+      // A route point lies at the cleaning clearance, a little beyond the
+      // planner's on its grid: if it cannot be planned to, try it moved along
+      // the route into the cell (at most three plans).
+      const auto& route = plan_.routes[cell_];
+      const Eigen::Vector2d toward =
+          point_ + 1 < route.size() ? route[point_ + 1] : (point_ > 0 ? route[point_ - 1] : goal);
+      const Eigen::Vector2d dir =
+          (toward - goal).norm() > 1e-6 ? Eigen::Vector2d((toward - goal).normalized()) : Eigen::Vector2d(0, 0);
+      for (double shift : {0.0, 0.06, 0.12}) {
+        if (shift > 0 && shift > (toward - goal).norm() - 0.02) break;
+        if (go_to_.TryGoal(RotateVector(goal + shift * dir, -rot), 0, false, slam, bumps)) {
+          go_to_.Begin(t);
+          phase_ = Phase::kTransit;
+          return {};
+        }
+      }
+      SkipPoint();
+      return {};
+    }
+    case Phase::kTransit: {
+      const GoTo::Result r = go_to_.Step(t, slam, raw_scan, bumpers, bumps, follower);
+      if (r.status == GoTo::Status::kDriving) return {Status::kCleaning, r.twist};
+      if (r.status == GoTo::Status::kGiveUp) {
+        SkipPoint();
+        return {};
+      }
+      ++point_;
+      phase_ = Phase::kSweep;
+      if (point_ >= plan_.routes[cell_].size()) NextCell(false);
+      return {};
+    }
+    case Phase::kSweep:
+      break;
+  }
+  if (bumpers != 0) {
+    // A contact on the lane: plan round it (the go-to escapes first) to the
+    // lane's next point.
+    phase_ = Phase::kPlanGoal;
+    return {};
+  }
+  const RangeScan scan = bumps.Apply(raw_scan, slam.pose());
+  bool blocked = false, passed = false;
+  const Twist tw = Follow(me, scan, &blocked, &passed);
+  if (passed) {
+    if (++point_ >= plan_.routes[cell_].size()) NextCell(false);
+    return {Status::kCleaning, tw};
+  }
+  if (blocked) {
+    phase_ = Phase::kPlanGoal;
+    return {};
+  }
+  return {Status::kCleaning, tw};
+}
+
+CleaningProgress Clean::Progress(double t, double distance_m) const {
+  CleaningProgress p = progress_;
+  p.covered_m2 = grid_.covered_m2();
+  p.fraction = p.total_m2 > 0 ? std::min(1.0, p.covered_m2 / p.total_m2) : 0;
+  if (p.state == CleanState::kCleaning) {
+    p.path_m = distance_m - start_distance_;
+    p.eta_s = RemainingRoute() / options_.sweep_speed_mps;
+  } else {
+    p.path_m = progress_.path_m;
+  }
+  p.cross_track_rms_m = cross_n_ > 0 ? std::sqrt(cross_sq_ / static_cast<double>(cross_n_)) : 0;
+  (void)t;
+  return p;
+}
+
+}  // namespace irslam::control

@@ -1,0 +1,123 @@
+// Cleaning the modelled room: plans the coverage once on entering (coverage.h,
+// bounded by the room's size), then drives each cell's route with a
+// cross-track controller (the heading is corrected towards the lane in
+// proportion to the distance off it; the error is reported), while SLAM goes on
+// correcting the pose. Between cells, and round anything the lanes run into that
+// the map does not have (a contact, an unmapped obstacle ahead), the go-to
+// behaviour plans a way with the A* planner; a route point it cannot reach is
+// skipped, and after max_goal_failures in one cell the rest of the cell is
+// reported unreachable (unreachable_m2), never retried. Pure: time, map and
+// readings are arguments.
+#ifndef IRSLAM_CONTROL_CLEAN_H_
+#define IRSLAM_CONTROL_CLEAN_H_
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "control/bump_memory.h"
+#include "control/coverage.h"
+#include "control/go_to.h"
+#include "control/room_model.h"
+#include "control/wall_follower.h"
+#include "slam/slam.h"
+
+namespace irslam::control {
+
+// The go-to options for cleaning: route points lie at the cleaning clearance
+// from walls and furniture, so the planner allows a little less, and the stop
+// for things ahead must not fire at every lane end.
+GoToOptions CleaningGoTo(GoToOptions g, const CleaningOptions& c);
+
+enum class CleanState { kNone, kCleaning, kReturning, kDone, kStopped };
+const char* ToString(CleanState s);
+
+// Progress of the cleaning (status.cleaning and the map's "cleaning").
+struct CleaningProgress {
+  CleanState state = CleanState::kNone;
+  double started_t = 0;
+  double finished_t = 0;  // 0 while not finished (home reached, or stopped)
+  double swept_t = 0;     // the last cell finished (going home from then); 0 before
+  int cells_done = 0;
+  int cells_total = 0;
+  double covered_m2 = 0;  // estimated from the SLAM pose
+  double total_m2 = 0;    // floor the body can reach from the plan's free space
+  double fraction = 0;
+  double path_m = 0;      // driven since cleaning began
+  double eta_s = 0;
+  double unreachable_m2 = 0;
+  double cross_track_rms_m = 0;  // on the lanes
+  double cross_track_max_m = 0;
+  double cleaning_width_m = 0;
+  // Per cell in tour order (map frame): outline of the floor it cleans, route,
+  // done (swept to the end) or unreachable (given up).
+  struct Cell {
+    int id = 0;
+    std::vector<Eigen::Vector2d> polygon;
+    std::vector<Eigen::Vector2d> route;
+    bool done = false;
+    bool unreachable = false;
+  };
+  std::vector<Cell> cells;
+};
+
+class Clean {
+ public:
+  enum class Status { kCleaning, kDone };
+  struct Result {
+    Status status = Status::kCleaning;
+    Twist twist;
+  };
+
+  Clean(CleaningOptions options, GoToOptions go_to, const RobotGeometry& geometry,
+        const std::array<SensorMount, kNumIrSensors>& mounts);
+
+  // Plans the coverage of the modelled room (once) and starts at its first cell.
+  void Begin(double t, const slam::Slam& slam, const EnvironmentModel& m, const BumpMemory& bumps);
+  Result Step(double t, const slam::Slam& slam, const RangeScan& raw_scan, uint8_t bumpers,
+              const BumpMemory& bumps, const WallFollower& follower);
+  // The mission's state changed: returning home, finished or stopped.
+  void SetState(CleanState s, double t, double distance_m);
+
+  const CleaningProgress& progress() const { return progress_; }
+  CleaningProgress Progress(double t, double distance_m) const;
+  const CoveragePlan& plan() const { return plan_; }
+  void Reset();
+  bool active() const { return progress_.state != CleanState::kNone; }
+  // The go-to's path (internal frame) while it drives.
+  const std::vector<Eigen::Vector2d>& path() const { return go_to_.path(); }
+
+ private:
+  enum class Phase { kPlanGoal, kTransit, kSweep, kDone };
+  // The current cell is finished (swept, or its rest given up).
+  void NextCell(bool unreachable);
+  // Gives the current route point up.
+  void SkipPoint();
+  double RemainingRoute() const;
+  // The share of the current cell's area that a length of its route sweeps.
+  double AreaShare(double length_m) const;
+  Twist Follow(const Pose2& me, const RangeScan& scan, bool* blocked, bool* passed);
+
+  CleaningOptions options_;
+  double radius_m_;
+  std::array<SensorMount, kNumIrSensors> mounts_;
+  GoTo go_to_;
+  CoveragePlan plan_;
+  CoverageGrid grid_;
+  CleaningProgress progress_;
+  Phase phase_ = Phase::kDone;
+  size_t cell_ = 0;   // position in the tour
+  size_t point_ = 0;  // the route point driven to
+  int failures_ = 0;  // in this cell
+  double start_distance_ = 0;
+  double progress_t_ = 0;  // got 0.1 m further at this time ...
+  Eigen::Vector2d progress_at_ = Eigen::Vector2d::Zero();  // ... from here
+  double cross_sq_ = 0;
+  long cross_n_ = 0;
+};
+
+}  // namespace irslam::control
+
+#endif  // IRSLAM_CONTROL_CLEAN_H_

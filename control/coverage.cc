@@ -1,0 +1,454 @@
+#include "control/coverage.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace irslam::control {
+
+options::Table<CleaningOptions> CleaningKeys() {
+  using O = CleaningOptions;
+  static constexpr options::Key<O> kKeys[] = {
+      {"cleaning_width_m", &O::cleaning_width_m, 0.05, 2, "m", "floor width cleaned in one pass"},
+      {"overlap_m", &O::overlap_m, 0, 1, "m", "neighbouring lanes overlap by this"},
+      {"clearance_m", &O::clearance_m, 0, 1, "m",
+       "lanes keep the robot radius plus this from walls and furniture"},
+      {"bump_block_m", &O::bump_block_m, 0, 1, "m",
+       "a remembered contact blocks the robot radius plus this round it"},
+      {"max_bump_obstacles", &O::max_bump_obstacles, 0, 1000, "",
+       "at most this many contacts (the latest) go into the plan"},
+      {"min_interval_m", &O::min_interval_m, 0.0001, 1, "m",
+       "free intervals and overlaps narrower than this do not count"},
+      {"both_directions", &O::both_directions, 0, 0, "",
+       "plan lanes along y and along x and keep the shorter (false: along y)"},
+      {"edge_pass", &O::edge_pass, 0, 0, "",
+       "go round each cell along its walls and furniture before its lanes"},
+      {"max_cells", &O::max_cells, 1, 10000, "", "cells of the decomposition at most"},
+      {"two_opt_rounds", &O::two_opt_rounds, 0, 1000, "", "improvement passes over the tour"},
+      {"sweep_speed_mps", &O::sweep_speed_mps, 0.01, 2, "m/s", "speed along a lane"},
+      {"k_cross", &O::k_cross, 0, 100, "rad/m",
+       "lane following: heading correction per metre off the lane"},
+      {"k_heading", &O::k_heading, 0.1, 20, "rad/s/rad", "turn rate per radian of heading error"},
+      {"max_rate_rad_s", &O::max_rate_rad_s, 0.05, 10, "rad/s", "turn rate limit on the lanes"},
+      {"turn_in_place_rad", &O::turn_in_place_rad, 0.05, 3.2, "rad",
+       "heading error beyond this: turn on the spot"},
+      {"waypoint_tolerance_m", &O::waypoint_tolerance_m, 0.005, 1, "m",
+       "a route point is passed within this"},
+      {"approach_gain", &O::approach_gain, 0.01, 100, "1/s",
+       "before a route point the speed is at most gain times distance plus 0.03 m/s"},
+      {"front_stop_m", &O::front_stop_m, 0, 1, "m",
+       "an unmapped obstacle ahead within the robot radius plus this: plan round it"},
+      {"coverage_cell_m", &O::coverage_cell_m, 0.01, 0.5, "m", "grid of the covered-floor estimate"},
+      {"stuck_s", &O::stuck_s, 1, 3600, "s",
+       "no 0.1 m of progress for this long while cleaning: the route point is given up"},
+      {"max_goal_failures", &O::max_goal_failures, 1, 1000, "",
+       "route points given up in one cell before the rest of it is reported unreachable"},
+      {"max_time_s", &O::max_time_s, 1, 1e6, "s", "cleaning plus going home, robot time"},
+      {"home_tolerance_m", &O::home_tolerance_m, 0.01, 1, "m", "home is reached within this"},
+      {"home_attempts", &O::home_attempts, 1, 100, "", "plans home before giving up"},
+  };
+  return kKeys;
+}
+
+double CoverageCell::area_m2() const {
+  double a = 0;
+  for (const auto& s : slabs) a += (s.x1 - s.x0) * (s.yhi - s.ylo);
+  return a;
+}
+
+std::vector<Eigen::Vector2d> CoverageCell::Outline(double g) const {
+  std::vector<Eigen::Vector2d> out;
+  if (slabs.empty()) return out;
+  // Lower boundary left to right, then the upper one right to left (a staircase).
+  for (size_t i = 0; i < slabs.size(); ++i) {
+    const double x0 = i == 0 ? slabs[i].x0 - g : slabs[i].x0;
+    const double x1 = i + 1 == slabs.size() ? slabs[i].x1 + g : slabs[i].x1;
+    out.emplace_back(x0, slabs[i].ylo - g);
+    out.emplace_back(x1, slabs[i].ylo - g);
+  }
+  for (size_t k = slabs.size(); k-- > 0;) {
+    const double x0 = k == 0 ? slabs[k].x0 - g : slabs[k].x0;
+    const double x1 = k + 1 == slabs.size() ? slabs[k].x1 + g : slabs[k].x1;
+    out.emplace_back(x1, slabs[k].yhi + g);
+    out.emplace_back(x0, slabs[k].yhi + g);
+  }
+  return out;
+}
+
+std::vector<CoverageCell> Decompose(const Box& free, const std::vector<Box>& obstacles,
+                                    const CleaningOptions& o) {
+  std::vector<CoverageCell> cells;
+  const double eps = 1e-9;
+  if (free.width() <= eps || free.height() < 0) return cells;
+  // The critical x positions: the free space's ends and every obstacle's x-edges within.
+  std::vector<double> xs = {free.xmin, free.xmax};
+  for (const auto& b : obstacles) {
+    if (b.xmin > free.xmin && b.xmin < free.xmax) xs.push_back(b.xmin);
+    if (b.xmax > free.xmin && b.xmax < free.xmax) xs.push_back(b.xmax);
+  }
+  std::sort(xs.begin(), xs.end());
+  xs.erase(std::unique(xs.begin(), xs.end(), [](double a, double b) { return b - a < 1e-6; }),
+           xs.end());
+  struct Piece {
+    double ylo, yhi;
+    int cell;
+  };
+  std::vector<Piece> prev;
+  for (size_t i = 0; i + 1 < xs.size(); ++i) {
+    const double x0 = xs[i], x1 = xs[i + 1];
+    if (x1 - x0 < 1e-6) continue;
+    // Blocked y-intervals of this slab, then the free ones between them.
+    std::vector<std::pair<double, double>> blocked;
+    for (const auto& b : obstacles) {
+      if (b.xmin < x1 - 1e-7 && b.xmax > x0 + 1e-7 && b.ymax > free.ymin && b.ymin < free.ymax)
+        blocked.emplace_back(b.ymin, b.ymax);
+    }
+    std::sort(blocked.begin(), blocked.end());
+    std::vector<Piece> pieces;
+    double y = free.ymin;
+    for (const auto& [lo, hi] : blocked) {
+      if (lo - y >= o.min_interval_m) pieces.push_back({y, lo, -1});
+      y = std::max(y, hi);
+    }
+    if (free.ymax - y >= o.min_interval_m) pieces.push_back({y, free.ymax, -1});
+    // Connectivity with the last slab: a cell goes on only one-to-one.
+    const auto overlap = [&](const Piece& a, const Piece& b) {
+      return std::min(a.yhi, b.yhi) - std::max(a.ylo, b.ylo) >= o.min_interval_m;
+    };
+    std::vector<int> right(prev.size(), 0), left(pieces.size(), 0);
+    for (size_t a = 0; a < prev.size(); ++a) {
+      for (size_t b = 0; b < pieces.size(); ++b) {
+        if (overlap(prev[a], pieces[b])) {
+          ++right[a];
+          ++left[b];
+        }
+      }
+    }
+    for (size_t b = 0; b < pieces.size(); ++b) {
+      for (size_t a = 0; a < prev.size(); ++a) {
+        if (!overlap(prev[a], pieces[b])) continue;
+        if (right[a] == 1 && left[b] == 1) pieces[b].cell = prev[a].cell;
+      }
+      if (pieces[b].cell < 0) {
+        pieces[b].cell = static_cast<int>(cells.size());
+        CoverageCell c;
+        c.id = pieces[b].cell + 1;
+        cells.push_back(c);
+        for (size_t a = 0; a < prev.size(); ++a) {
+          if (!overlap(prev[a], pieces[b])) continue;
+          cells[static_cast<size_t>(prev[a].cell)].neighbours.push_back(pieces[b].cell);
+          cells.back().neighbours.push_back(prev[a].cell);
+        }
+      }
+      cells[static_cast<size_t>(pieces[b].cell)].slabs.push_back(
+          {x0, x1, pieces[b].ylo, pieces[b].yhi});
+    }
+    prev = pieces;
+  }
+  if (static_cast<int>(cells.size()) > o.max_cells) {
+    // Bounded: keep the largest cells.
+    std::stable_sort(cells.begin(), cells.end(), [](const CoverageCell& a, const CoverageCell& b) {
+      return a.area_m2() > b.area_m2();
+    });
+    cells.resize(static_cast<size_t>(o.max_cells));
+    for (auto& c : cells) c.neighbours.clear();
+  }
+  return cells;
+}
+
+namespace {
+
+// The interval of the cell at x (the narrowest where x is on a slab boundary).
+std::pair<double, double> IntervalAt(const CoverageCell& c, double x) {
+  double lo = -std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const auto& s : c.slabs) {
+    if (x >= s.x0 - 1e-7 && x <= s.x1 + 1e-7) {
+      lo = std::max(lo, s.ylo);
+      hi = std::min(hi, s.yhi);
+    }
+  }
+  if (hi < lo) hi = lo = 0.5 * (lo + hi);  // a step wider than the overlap: meet halfway
+  return {lo, hi};
+}
+
+// Along the lower (top = false) or upper boundary from xa to xb (the end points'
+// y from IntervalAt), with the staircase's steps.
+void Boundary(const CoverageCell& c, double xa, double xb, bool top,
+              std::vector<Eigen::Vector2d>* out) {
+  const auto y_of = [&](double x) {
+    const auto [lo, hi] = IntervalAt(c, x);
+    return top ? hi : lo;
+  };
+  out->emplace_back(xa, y_of(xa));
+  const bool right = xb > xa;
+  const size_t n = c.slabs.size();
+  for (size_t k = 0; k + 1 < n; ++k) {
+    const size_t i = right ? k : n - 2 - k;  // the boundary between slabs i and i+1
+    const double xbnd = c.slabs[i].x1;
+    if (!(right ? (xbnd > xa + 1e-7 && xbnd < xb - 1e-7) : (xbnd < xa - 1e-7 && xbnd > xb + 1e-7)))
+      continue;
+    const Slab& before = right ? c.slabs[i] : c.slabs[i + 1];
+    const Slab& after = right ? c.slabs[i + 1] : c.slabs[i];
+    const double y0 = top ? before.yhi : before.ylo, y1 = top ? after.yhi : after.ylo;
+    if (std::abs(y0 - y1) < 1e-9) continue;
+    // The step lies on the edge of the box that makes it.
+    out->emplace_back(xbnd, y0);
+    out->emplace_back(xbnd, y1);
+  }
+  out->emplace_back(xb, y_of(xb));
+}
+
+// Drops repeated points and the middle of collinear runs.
+std::vector<Eigen::Vector2d> Simplify(const std::vector<Eigen::Vector2d>& in) {
+  std::vector<Eigen::Vector2d> out;
+  for (const auto& p : in) {
+    if (!out.empty() && (p - out.back()).norm() < 1e-6) continue;
+    if (out.size() >= 2) {
+      const Eigen::Vector2d a = out[out.size() - 1] - out[out.size() - 2], b = p - out.back();
+      if (std::abs(a.x() * b.y() - a.y() * b.x()) < 1e-9 && a.dot(b) > 0) {
+        out.back() = p;
+        continue;
+      }
+    }
+    out.push_back(p);
+  }
+  return out;
+}
+
+CoverageCell Mirrored(const CoverageCell& c, bool mx, bool my) {
+  CoverageCell m = c;
+  m.slabs.clear();
+  for (const auto& s : c.slabs) {
+    Slab t = s;
+    if (mx) {
+      t.x0 = -s.x1;
+      t.x1 = -s.x0;
+    }
+    if (my) {
+      t.ylo = -s.yhi;
+      t.yhi = -s.ylo;
+    }
+    m.slabs.push_back(t);
+  }
+  if (mx) std::reverse(m.slabs.begin(), m.slabs.end());
+  return m;
+}
+
+double Gap(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return (a - b).norm(); }
+
+}  // namespace
+
+std::vector<Eigen::Vector2d> SweepRoute(const CoverageCell& cell, double spacing, bool mirror_x,
+                                        bool mirror_y, bool edge_pass) {
+  const CoverageCell c = Mirrored(cell, mirror_x, mirror_y);
+  std::vector<Eigen::Vector2d> r;
+  if (c.slabs.empty()) return r;
+  const double x0 = c.slabs.front().x0, x1 = c.slabs.back().x1, w = x1 - x0;
+  const int n = w < 1e-3 ? 1 : static_cast<int>(std::ceil(w / spacing - 1e-9)) + 1;
+  if (n == 1) {
+    const double x = 0.5 * (x0 + x1);
+    const auto [lo, hi] = IntervalAt(c, x);
+    r = {{x, lo}, {x, hi}};
+  } else {
+    const auto lane_x = [&](int k) { return x0 + w * k / (n - 1); };
+    int first = 0, last = n - 1;
+    if (edge_pass) {
+      // Edge pass: along the lower boundary, up the last lane, back along the
+      // upper boundary, down the first lane; then the lanes in between.
+      Boundary(c, x0, x1, false, &r);
+      Boundary(c, x1, x0, true, &r);
+      first = 1;
+      last = n - 2;
+    }
+    r.emplace_back(x0, IntervalAt(c, x0).first);
+    // The lanes, up and down, joined along the boundaries.
+    bool at_top = false;
+    double x = x0;
+    for (int k = first; k <= last; ++k) {
+      const double xk = lane_x(k);
+      if (k > 0) Boundary(c, x, xk, at_top, &r);
+      const auto [lo, hi] = IntervalAt(c, xk);
+      if (k == 0) r.emplace_back(xk, at_top ? hi : lo);
+      r.emplace_back(xk, at_top ? lo : hi);
+      at_top = !at_top;
+      x = xk;
+    }
+  }
+  r = Simplify(r);
+  for (auto& p : r) {
+    if (mirror_x) p.x() = -p.x();
+    if (mirror_y) p.y() = -p.y();
+  }
+  return r;
+}
+
+namespace {
+
+Box Swap(const Box& b) { return {b.ymin, b.xmin, b.ymax, b.xmax}; }
+Eigen::Vector2d Swap(const Eigen::Vector2d& p) { return {p.y(), p.x()}; }
+
+// The plan with lanes along y (swap: along x, by planning in the frame with x
+// and y swapped and swapping the routes back).
+CoveragePlan PlanOriented(Box room, std::vector<Box> objects, std::vector<Eigen::Vector2d> bumps,
+                          Eigen::Vector2d start, double radius, const CleaningOptions& o, bool swap) {
+  if (swap) {
+    room = Swap(room);
+    for (auto& b : objects) b = Swap(b);
+    for (auto& p : bumps) p = Swap(p);
+    start = Swap(start);
+  }
+  CoveragePlan plan;
+  plan.swapped = swap;
+  const double g = radius + o.clearance_m;
+  plan.inflation_m = g;
+  plan.lane_spacing_m = std::max(0.02, o.cleaning_width_m - o.overlap_m);
+  plan.free = {room.xmin + g, room.ymin + g, room.xmax - g, room.ymax - g};
+  std::vector<Box> obstacles;
+  for (const auto& b : objects) obstacles.push_back({b.xmin - g, b.ymin - g, b.xmax + g, b.ymax + g});
+  const double gb = radius + o.bump_block_m;
+  const size_t first = bumps.size() > static_cast<size_t>(o.max_bump_obstacles)
+                           ? bumps.size() - static_cast<size_t>(o.max_bump_obstacles)
+                           : 0;
+  for (size_t i = first; i < bumps.size(); ++i) {
+    const auto& p = bumps[i];
+    obstacles.push_back({p.x() - gb, p.y() - gb, p.x() + gb, p.y() + gb});
+  }
+  plan.cells = Decompose(plan.free, obstacles, o);
+  const size_t n = plan.cells.size();
+  if (n == 0) return plan;
+  // The tour over the cells' middles: greedy nearest neighbour from the robot ...
+  std::vector<Eigen::Vector2d> mid(n);
+  for (size_t i = 0; i < n; ++i) {
+    const auto& s = plan.cells[i].slabs;
+    mid[i] = {0.5 * (s.front().x0 + s.back().x1), 0.5 * (s[s.size() / 2].ylo + s[s.size() / 2].yhi)};
+  }
+  std::vector<int> order;
+  std::vector<bool> used(n, false);
+  Eigen::Vector2d at = start;
+  for (size_t k = 0; k < n; ++k) {
+    size_t best = n;
+    for (size_t i = 0; i < n; ++i) {
+      if (!used[i] && (best == n || Gap(at, mid[i]) < Gap(at, mid[best]))) best = i;
+    }
+    used[best] = true;
+    order.push_back(static_cast<int>(best));
+    at = mid[best];
+  }
+  // ... then 2-opt on the open path from the robot (segment reversals).
+  const auto pos = [&](int k) { return k < 0 ? start : mid[static_cast<size_t>(order[static_cast<size_t>(k)])]; };
+  for (int round = 0; round < o.two_opt_rounds; ++round) {
+    bool better = false;
+    const int m = static_cast<int>(n);
+    for (int i = 0; i < m - 1; ++i) {
+      for (int j = i + 1; j < m; ++j) {
+        // Reverse order[i..j]: edges (i-1,i) and (j,j+1) become (i-1,j) and (i,j+1).
+        double before = Gap(pos(i - 1), pos(i)), after = Gap(pos(i - 1), pos(j));
+        if (j + 1 < m) {
+          before += Gap(pos(j), pos(j + 1));
+          after += Gap(pos(i), pos(j + 1));
+        }
+        if (after < before - 1e-9) {
+          std::reverse(order.begin() + i, order.begin() + j + 1);
+          better = true;
+        }
+      }
+    }
+    if (!better) break;
+  }
+  // Each cell entered from the corner nearest where the last route ended.
+  at = start;
+  for (int ci : order) {
+    std::vector<Eigen::Vector2d> best;
+    for (int corner = 0; corner < 4; ++corner) {
+      auto r = SweepRoute(plan.cells[static_cast<size_t>(ci)], plan.lane_spacing_m, corner & 1,
+                          corner & 2, o.edge_pass);
+      if (best.empty() || Gap(at, r.front()) < Gap(at, best.front())) best = std::move(r);
+    }
+    plan.transit_length_m += Gap(at, best.front());
+    for (size_t k = 1; k < best.size(); ++k) plan.route_length_m += Gap(best[k - 1], best[k]);
+    at = best.back();
+    plan.routes.push_back(std::move(best));
+  }
+  plan.order = std::move(order);
+  if (swap) {
+    for (auto& r : plan.routes)
+      for (auto& p : r) p = Swap(p);
+  }
+  return plan;
+}
+
+}  // namespace
+
+std::vector<Box> CoveragePlan::FreeRects() const {
+  std::vector<Box> out;
+  for (const auto& c : cells) {
+    for (const auto& s : c.slabs) {
+      const Box b{s.x0, s.ylo, s.x1, s.yhi};
+      out.push_back(swapped ? Swap(b) : b);
+    }
+  }
+  return out;
+}
+
+CoveragePlan PlanCoverage(const Box& room, const std::vector<Box>& objects,
+                          const std::vector<Eigen::Vector2d>& bumps, const Eigen::Vector2d& start,
+                          double radius, const CleaningOptions& o) {
+  CoveragePlan along_y = PlanOriented(room, objects, bumps, start, radius, o, false);
+  if (!o.both_directions) return along_y;
+  CoveragePlan along_x = PlanOriented(room, objects, bumps, start, radius, o, true);
+  const auto cost = [](const CoveragePlan& p) { return p.route_length_m + p.transit_length_m; };
+  return cost(along_x) < cost(along_y) - 1e-9 ? along_x : along_y;
+}
+
+void CoverageGrid::Init(const Box& room, const std::vector<Box>& rects, double r, double cell_m) {
+  room_ = room;
+  cell_m_ = cell_m;
+  radius_m_ = r;
+  // Bounded by the room's size (a room up to 50 m across at the finest cell).
+  nx_ = std::clamp(static_cast<int>(std::ceil(room.width() / cell_m)), 0, 4000);
+  ny_ = std::clamp(static_cast<int>(std::ceil(room.height() / cell_m)), 0, 4000);
+  state_.assign(static_cast<size_t>(nx_) * static_cast<size_t>(ny_), 0);
+  target_ = covered_ = 0;
+  for (const Box& b : rects) {
+    {
+      const Slab s{b.xmin, b.xmax, b.ymin, b.ymax};
+      const int i0 = std::max(0, static_cast<int>((s.x0 - r - room.xmin) / cell_m));
+      const int i1 = std::min(nx_ - 1, static_cast<int>((s.x1 + r - room.xmin) / cell_m));
+      const int j0 = std::max(0, static_cast<int>((s.ylo - r - room.ymin) / cell_m));
+      const int j1 = std::min(ny_ - 1, static_cast<int>((s.yhi + r - room.ymin) / cell_m));
+      for (int i = i0; i <= i1; ++i) {
+        for (int j = j0; j <= j1; ++j) {
+          const double x = room.xmin + (i + 0.5) * cell_m, y = room.ymin + (j + 0.5) * cell_m;
+          const double dx = std::max({s.x0 - x, 0.0, x - s.x1});
+          const double dy = std::max({s.ylo - y, 0.0, y - s.yhi});
+          uint8_t& st = state_[static_cast<size_t>(j) * static_cast<size_t>(nx_) + static_cast<size_t>(i)];
+          if (st == 0 && std::hypot(dx, dy) <= r) {
+            st = 1;
+            ++target_;
+          }
+        }
+      }
+    }
+  }
+}
+
+void CoverageGrid::Mark(const Eigen::Vector2d& p) {
+  if (nx_ == 0 || ny_ == 0) return;
+  const double r = radius_m_;
+  const int i0 = std::max(0, static_cast<int>((p.x() - r - room_.xmin) / cell_m_));
+  const int i1 = std::min(nx_ - 1, static_cast<int>((p.x() + r - room_.xmin) / cell_m_));
+  const int j0 = std::max(0, static_cast<int>((p.y() - r - room_.ymin) / cell_m_));
+  const int j1 = std::min(ny_ - 1, static_cast<int>((p.y() + r - room_.ymin) / cell_m_));
+  for (int i = i0; i <= i1; ++i) {
+    for (int j = j0; j <= j1; ++j) {
+      const double x = room_.xmin + (i + 0.5) * cell_m_, y = room_.ymin + (j + 0.5) * cell_m_;
+      uint8_t& st = state_[static_cast<size_t>(j) * static_cast<size_t>(nx_) + static_cast<size_t>(i)];
+      if (st == 1 && std::hypot(x - p.x(), y - p.y()) <= r) {
+        st = 2;
+        ++covered_;
+      }
+    }
+  }
+}
+
+}  // namespace irslam::control

