@@ -22,6 +22,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <deque>
+#include <optional>
 #include <vector>
 
 #include "slam/line_ekf.h"
@@ -60,9 +61,21 @@ struct AssociationOptions {
   bool pin_first_line = false;
 };
 
+// The odometry calibration learnt (e.g. kept in a saved map): the scale factors
+// and their standard deviations (kl, kr, kb).
+struct CalibrationEstimate {
+  OdometryCalibration value;
+  Eigen::Vector3d sigma = Eigen::Vector3d::Zero();
+  double ratio_sigma = 0;  // of value.ratio() (from the full covariance; 0 when not known)
+};
+
 struct SlamOptions {
   RobotGeometry geometry;
   MotionNoise motion_noise;
+  CalibrationOptions calibration;  // [slam.calibration]
+  // Not a config key: the calibration a mission starts from (the saved map's,
+  // set by the daemon or the simulator); none: nominal with the prior sigmas.
+  std::optional<CalibrationEstimate> initial_calibration;
   std::array<SensorMount, kNumIrSensors> mounts{};
   double trajectory_period_s = 0.25;  // trajectory sampling (>= 2 Hz, contracts §4)
   PdsOptions pds;
@@ -96,7 +109,7 @@ struct SlamStats {
 };
 
 // Config section [slam]: SlamKeys() (with MotionNoiseKeys()), and its
-// subsections [slam.pds], [slam.association].
+// subsections [slam.pds], [slam.association], [slam.calibration] (CalibrationKeys()).
 options::Table<SlamOptions> SlamKeys();
 options::Table<PdsOptions> PdsKeys();
 options::Table<AssociationOptions> AssociationKeys();
@@ -127,6 +140,8 @@ class Slam {
   double distance_m() const { return odometry_.distance_m(); }
   double time() const { return odometry_.last_t(); }
   const SlamStats& stats() const { return stats_; }
+  // The odometry's estimated systematic parameters and their sigmas.
+  CalibrationEstimate calibration() const;
   // The lines extracted from the last closed PDS window (robot frame), e.g. for
   // recording observations for the Appendix 1 weights.
   const std::vector<ExtractedLine>& last_window_lines() const { return last_window_lines_; }
