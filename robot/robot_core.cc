@@ -141,7 +141,9 @@ CoreStatus RobotCore::Status(double now_s) const {
             {std::sqrt(cov(0, 0)), std::sqrt(cov(1, 1)), std::sqrt(cov(2, 2))},
             slam_.distance_m(),
             slam_.num_lines(),
-            slam_.stats()};
+            slam_.stats(),
+            slam_.calibration(),
+            options_.slam.calibration.enabled};
   s.model = {mission_.model().objects.size(), mission_.model().pending()};
   s.ir = {ir_.scan(), ir_.last_adc()};
   s.command = last_cmd_;
@@ -153,8 +155,14 @@ CoreStatus RobotCore::Status(double now_s) const {
 
 MapSnapshot RobotCore::Map() const {
   const control::EnvironmentModel& model = mission_.model();
-  return {mission_.state(),    slam_.map_pose(), slam_.map_pose_cov(),     slam_.map_lines(),
-          model.room,          model.objects,    slam_.map_trajectory()};
+  return {mission_.state(),
+          slam_.map_pose(),
+          slam_.map_pose_cov(),
+          slam_.map_lines(),
+          model.room,
+          model.objects,
+          slam_.map_trajectory(),
+          options_.slam.calibration.enabled ? std::optional(slam_.calibration()) : std::nullopt};
 }
 
 }  // namespace irslam::robot

@@ -356,6 +356,7 @@ void Slam::Associate(const ExtractedLine& obs) {
   const long n = ekf_.x().size();
   std::vector<Eigen::RowVectorXd> rows;
   std::vector<double> y, r;
+  double r_scale = 1;  // > 1 only for a gate recovery
   for (int k = 0; k < 2; ++k) {
     Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(n);
     row.head<3>() = j.row(k).head<3>();
@@ -374,9 +375,16 @@ void Slam::Associate(const ExtractedLine& obs) {
     // H P H' from H's non-zero columns (not a pass over the whole of P).
     const Eigen::Matrix2d s = ekf_.ProjectedCov(hm) + obs.cov * ao.measurement_cov_scale;
     const Eigen::Vector2d yy(y[0], y[1]);
-    if (yy.dot(s.inverse() * yy) > ao.max_mahalanobis2) {
+    const double d2 = yy.dot(s.inverse() * yy);
+    if (d2 > ao.max_mahalanobis2) {
       ++stats_.rejected_gate;
-      return;
+      if (ao.gate_recovery_after <= 0 || ++gate_rejections_in_a_row_ < ao.gate_recovery_after) return;
+      // Locked out: use it with R scaled so that it sits on the gate.
+      gate_rejections_in_a_row_ = 0;
+      ++stats_.gate_recoveries;
+      r_scale = d2 / ao.max_mahalanobis2;
+    } else {
+      gate_rejections_in_a_row_ = 0;
     }
   }
   AppendConstraintRows(best, &rows, &y, &r);
@@ -384,7 +392,7 @@ void Slam::Associate(const ExtractedLine& obs) {
   Eigen::MatrixXd h(m, n);
   Eigen::VectorXd yy(m);
   Eigen::MatrixXd rr = Eigen::MatrixXd::Zero(m, m);
-  rr.topLeftCorner<2, 2>() = obs.cov * ao.measurement_cov_scale;
+  rr.topLeftCorner<2, 2>() = obs.cov * (ao.measurement_cov_scale * r_scale);
   for (long k = 0; k < m; ++k) {
     h.row(k) = rows[static_cast<size_t>(k)];
     yy(k) = y[static_cast<size_t>(k)];
@@ -482,6 +490,8 @@ options::Table<AssociationOptions> AssociationKeys() {
        "... and only to one at least this long (a wall, not a face)"},
       {"measurement_cov_scale", &A::measurement_cov_scale, 1e-6, 1e6, "", "multiplies the eq. (7) covariance"},
       {"max_mahalanobis2", &A::max_mahalanobis2, 0.1, 1e9, "", "innovation gate of a match (chi^2, 2 dof)"},
+      {"gate_recovery_after", &A::gate_recovery_after, 0, 1000, "",
+       "after this many gate rejections in a row, the next is used with its noise inflated onto the gate (0: never)"},
       {"use_constraints", &A::use_constraints, 0, 0, "", "false: plain EKF (comparison, Fig. 17)"},
       {"pin_first_line", &A::pin_first_line, 0, 0, "",
        "true: the paper's pinned theta_1 (less accurate, docs/accuracy.md)"},

@@ -53,6 +53,11 @@ struct AssociationOptions {
   double collinear_min_length_m = 1.0;  // ... and only to a mapped line at least this long
   double measurement_cov_scale = 1.0; // multiplies the eq. (7) covariance
   double max_mahalanobis2 = 13.8;     // innovation gate of a match (chi2, 2 dof, 99.9 %)
+  // After this many gate rejections in a row (0: never), the next match the gate
+  // rejects is used with its noise inflated to sit on the gate: the filter cannot
+  // be locked out by its own overconfidence after a bad stretch (slip, a floor
+  // change the calibration has not followed yet).
+  int gate_recovery_after = 0;
   bool use_constraints = true;        // off: plain EKF (for comparison, Fig. 17)
   // The paper pins theta_1 at its first observation. Off (default): line 1 is
   // estimated like the others (the start pose is known, so the frame is fixed
@@ -104,6 +109,7 @@ struct SlamStats {
   int collinear_declined = 0;   // collinear by eq. (13) but not tied (offset, or short partner)
   int rejected_angle = 0;   // neither parallel nor orthogonal to line 1
   int rejected_gate = 0;    // matched by DH but inconsistent with the covariance
+  int gate_recoveries = 0;  // rejected matches used anyway, noise inflated (gate_recovery_after)
   int merges = 0;
   int loop_closures = 0;    // merges into the first line
 };
@@ -175,6 +181,7 @@ class Slam {
   SlamStats stats_;
   std::vector<ExtractedLine> last_window_lines_;
   int next_id_ = 1;
+  int gate_rejections_in_a_row_ = 0;
 
   // Recent odometry poses (for scans stamped between encoder frames) and scans
   // waiting for the odometry to reach their time.
