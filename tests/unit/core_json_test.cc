@@ -161,6 +161,7 @@ TEST(CoreJsonTest, TheMapKeepsTheOdometryCalibrationThroughTheMapFile) {
 // A live core: its map and status carry the calibration it estimates.
 TEST(CoreJsonTest, StatusAndMapReportTheCalibration) {
   robot::CoreOptions o = robot::DefaultCoreOptions();
+  o.slam.calibration.enabled = true;
   o.slam.initial_calibration = slam::CalibrationEstimate{{1.01, 0.99, 1.02}, Eigen::Vector3d(1e-3, 1e-3, 2e-3), 0};
   const robot::RobotCore core(o);
   const nlohmann::json status = ToJson(core.Status(0));

@@ -124,6 +124,8 @@ TEST_F(DaemonMissionTest, AReloadAfterAMissionNeitherServesNorSavesAnEmptyMap) {
 // The odometry calibration a mission learnt is kept in the saved map, carried
 // over a reload, and the next run of the daemon starts from it.
 TEST_F(DaemonMissionTest, TheOdometryCalibrationIsSavedCarriedOverAndStartedFrom) {
+  core_.slam.calibration.enabled = true;
+  std::ofstream(options_.config_path) << R"({"slam": {"calibration": {"enabled": true}}})";
   Open();
   Run(1);
   ASSERT_TRUE(Call("start").contains("result"));
@@ -139,7 +141,8 @@ TEST_F(DaemonMissionTest, TheOdometryCalibrationIsSavedCarriedOverAndStartedFrom
   ASSERT_TRUE(saved->map.contains("calibration"));
   EXPECT_EQ(saved->map["calibration"]["scale"], learnt["scale"]);
   // A reload: the new core starts from what the old one learnt.
-  std::ofstream(options_.config_path) << R"({"control": {"period_s": 0.01}})";
+  std::ofstream(options_.config_path)
+      << R"({"control": {"period_s": 0.01}, "slam": {"calibration": {"enabled": true}}})";
   daemon_->Reload();
   const double resume = slam::CalibrationOptions{}.resume_sigma;
   nlohmann::json now = daemon_->StatusJson()["slam"]["calibration"];
