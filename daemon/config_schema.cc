@@ -171,6 +171,9 @@ void WalkSlam(robot::CoreOptions* o, Visitor* v) {
   v->Section("association", "constrained EKF (paper section 4)");
   v->Keys(&o->slam.association, slam::AssociationKeys());
   v->End();
+  v->Section("calibration", "odometry self-calibration: wheel radius and track width scale factors in the EKF");
+  v->Keys(&o->slam.calibration, slam::CalibrationKeys());
+  v->End();
   v->End();
 }
 

@@ -23,7 +23,8 @@ json SlamStatsJson(const slam::SlamStats& st) {
   return {{"windows", st.windows},           {"lines_extracted", st.lines_extracted},
           {"updates", st.updates},           {"insertions", st.insertions},
           {"rejected_angle", st.rejected_angle}, {"merges", st.merges},
-          {"loop_closures", st.loop_closures}};
+          {"loop_closures", st.loop_closures}, {"rejected_gate", st.rejected_gate},
+          {"gate_recoveries", st.gate_recoveries}};
 }
 
 json SafetyJson(const robot::SafetyStatus& s) {
@@ -129,7 +130,38 @@ json CleaningJson(const control::CleaningProgress& c, bool cells) {
 
 }  // namespace
 
+json CalibrationJson(const slam::CalibrationEstimate& c) {
+  return {{"scale", {c.value.left, c.value.right, c.value.base}},
+          {"std", {c.sigma(0), c.sigma(1), c.sigma(2)}},
+          {"ratio", c.value.ratio()},
+          {"ratio_std", c.ratio_sigma}};
+}
+
+std::optional<slam::CalibrationEstimate> CalibrationFromMap(const json& map) {
+  if (!map.is_object() || !map.contains("calibration")) return std::nullopt;
+  const json& c = map["calibration"];
+  const auto numbers = [&](const char* key, double lo, double hi, double out[3]) {
+    if (!c.is_object() || !c.contains(key) || !c[key].is_array() || c[key].size() != 3) return false;
+    for (size_t i = 0; i < 3; ++i) {
+      if (!c[key][i].is_number()) return false;
+      out[i] = c[key][i].get<double>();
+      if (!(out[i] >= lo && out[i] <= hi)) return false;
+    }
+    return true;
+  };
+  double scale[3], sd[3];
+  if (!numbers("scale", 0.5, 1.5, scale) || !numbers("std", 0, 0.5, sd)) return std::nullopt;
+  slam::CalibrationEstimate e;
+  e.value = {scale[0], scale[1], scale[2]};
+  e.sigma = Eigen::Vector3d(sd[0], sd[1], sd[2]);
+  e.ratio_sigma = c.contains("ratio_std") && c["ratio_std"].is_number() ? c["ratio_std"].get<double>() : 0.0;
+  return e;
+}
+
 json ToJson(const robot::CoreStatus& s) {
+  json slam = SlamStatsJson(s.slam.stats);
+  slam["calibration"] = CalibrationJson(s.slam.calibration);
+  slam["calibration"]["enabled"] = s.slam.calibration_enabled;
   json ranges = json::array();
   for (const auto& r : s.ir.scan.range_m) ranges.push_back(r ? json(*r) : json());
   json j = {
@@ -141,7 +173,7 @@ json ToJson(const robot::CoreStatus& s) {
       {"pose_std", s.slam.pose_std},
       {"distance", s.slam.distance_m},
       {"lines", s.slam.lines},
-      {"slam", SlamStatsJson(s.slam.stats)},
+      {"slam", slam},
       {"objects", s.model.objects},
       {"objects_pending", s.model.pending},
       {"target_object", s.mission.target_object},
@@ -174,6 +206,7 @@ json ToJson(const robot::MapSnapshot& m) {
       {"trajectory", traj},
   };
   if (m.cleaning) j["cleaning"] = CleaningJson(*m.cleaning, true);
+  if (m.calibration) j["calibration"] = CalibrationJson(*m.calibration);
   return j;
 }
 

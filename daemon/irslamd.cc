@@ -47,6 +47,16 @@ bool Daemon::Open(std::string* error) {
   bus_ = drivers::OpenCanBus(io_, bus_options, error);
   if (!bus_) return false;
   maps_.Load();  // the map saved by the previous run (a bad file is moved aside, never loaded)
+  // Its odometry calibration, if it kept one: the core starts from it (nothing
+  // has reached the core yet, so it is simply made again with it).
+  if (maps_.stored()) {
+    if (const auto c = CalibrationFromMap(maps_.stored()->map)) {
+      core_options_.slam.initial_calibration = c;
+      core_ = std::make_unique<robot::RobotCore>(core_options_);
+      std::fprintf(stderr, "<6>irslamd: odometry calibration from the saved map: wheel radius scale %.5f/%.5f, "
+                   "track width scale %.5f\n", c->value.left, c->value.right, c->value.base);
+    }
+  }
   // A configured safety line that cannot be had is an error, never ignored.
   gpio_ = drivers::Gpio::Open(io_, core_options_.gpio, error);
   if (!gpio_) return false;
@@ -234,6 +244,11 @@ void Daemon::ApplyOptions(robot::CoreOptions fresh) {
     fresh.gpio = core_options_.gpio;
     fresh.gpio.debounce_s = debounce_s;
   }
+  // The odometry calibration carries over: what the old core learnt if a mission
+  // ran on it, else what it started from.
+  fresh.slam.initial_calibration = maps_.has_live_map() && core_options_.slam.calibration.enabled
+                                       ? std::optional(core_->slam().calibration())
+                                       : core_options_.slam.initial_calibration;
   maps_.OnCoreReplaced(LiveMap());  // the old core's map is kept (and saved if it was not)
   core_options_ = fresh;
   core_ = std::make_unique<robot::RobotCore>(fresh);

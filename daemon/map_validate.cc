@@ -108,6 +108,17 @@ bool ValidateMapBody(const json& map, std::string* error) {
   for (size_t i = 0; i < map["objects"].size() && c.ok(); ++i) {
     CheckObject(map["objects"][i], "objects[" + std::to_string(i) + "]", &c);
   }
+  if (c.ok() && map.contains("calibration")) {
+    const json& k = map["calibration"];
+    c.Require(k.is_object(), "calibration", "not an object");
+    if (c.ok()) {
+      c.Require(k.contains("scale") && Numbers(k["scale"], 3), "calibration.scale", "not an array of 3 numbers");
+      c.Require(k.contains("std") && Numbers(k["std"], 3), "calibration.std", "not an array of 3 numbers");
+      for (const char* key : {"ratio", "ratio_std"}) {
+        c.Require(!k.contains(key) || k[key].is_number(), std::string("calibration.") + key, "not a number");
+      }
+    }
+  }
   if (c.ok() && map.contains("room")) CheckRoom(map["room"], &c);
   if (c.ok() && map.contains("trajectory")) {
     const json& t = map["trajectory"];

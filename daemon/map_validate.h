@@ -6,7 +6,9 @@
 // Checked when present: "pose" [3 numbers], "pose_cov" 3x3 numbers, "room"
 // {"walls": {side: [ints]}, "box": null or 4 numbers}, "trajectory" [[4 numbers]].
 // Each line: "id" integer, "rho", "theta" numbers, "cov" 2x2 numbers, "p0", "p1"
-// [2 numbers], optional "length" number. Each object: "id" integer, "kind"
+// [2 numbers], optional "length" number. Optional "calibration" (the odometry's,
+// daemon/core_json.h): "scale" and "std" [3 numbers], optional "ratio" and
+// "ratio_std" numbers. Each object: "id" integer, "kind"
 // string, "lines" [ints], optional "complete" bool and "box" 4 numbers.
 // Unknown keys are allowed (§4 is extended compatibly, e.g. "cleaning").
 #ifndef IRSLAM_DAEMON_MAP_VALIDATE_H_

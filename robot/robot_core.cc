@@ -12,6 +12,13 @@ CoreOptions DefaultCoreOptions() {
     const double a = deg[i] * M_PI / 180.0;
     o.slam.mounts[i] = {0.05 * std::cos(a), 0.05 * std::sin(a), a};
   }
+  // The odometry self-calibration is off in the shipped configuration for now:
+  // with it on, three paper-world mission tests change outcome (mission_test
+  // fig19 seed 2 misses a piece; mission_run_test seed 2's contour following
+  // times out; FaultRunTest's loop no longer misses the box it is built around)
+  // although the campaign's rates improve (docs/robustness.md). Turn it on with
+  // slam.calibration.enabled = true.
+  o.slam.calibration.enabled = false;
   return o;
 }
 
@@ -143,7 +150,9 @@ CoreStatus RobotCore::Status(double now_s) const {
             {std::sqrt(cov(0, 0)), std::sqrt(cov(1, 1)), std::sqrt(cov(2, 2))},
             slam_.distance_m(),
             slam_.num_lines(),
-            slam_.stats()};
+            slam_.stats(),
+            slam_.calibration(),
+            options_.slam.calibration.enabled};
   s.model = {mission_.model().objects.size(), mission_.model().pending()};
   s.ir = {ir_.scan(), ir_.last_adc()};
   s.command = last_cmd_;
@@ -157,7 +166,8 @@ CoreStatus RobotCore::Status(double now_s) const {
 MapSnapshot RobotCore::Map() const {
   const control::EnvironmentModel& model = mission_.model();
   MapSnapshot m{mission_.state(),    slam_.map_pose(), slam_.map_pose_cov(),     slam_.map_lines(),
-                model.room,          model.objects,    slam_.map_trajectory(), std::nullopt};
+                model.room,          model.objects,    slam_.map_trajectory(), std::nullopt,
+                options_.slam.calibration.enabled ? std::optional(slam_.calibration()) : std::nullopt};
   if (mission_.clean().active()) m.cleaning = mission_.cleaning(slam_.time(), slam_.distance_m());
   return m;
 }

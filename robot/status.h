@@ -37,6 +37,10 @@ struct SlamStatus {
   double distance_m = 0;             // travelled (odometry)
   size_t lines = 0;
   slam::SlamStats stats;
+  // The odometry's calibration (wheel radius and track width scale factors) and
+  // whether it is being estimated ([slam.calibration].enabled).
+  slam::CalibrationEstimate calibration;
+  bool calibration_enabled = false;
 };
 
 struct ModelStatus {
@@ -93,6 +97,9 @@ struct MapSnapshot {
   std::vector<control::ObjectModel> objects;
   std::vector<TimedPose> trajectory;  // the corrected estimate
   std::optional<control::CleaningProgress> cleaning;  // when cleaning ran since the last start
+  // The odometry's calibration learnt (kept in the saved map: the next mission
+  // starts from it); none when it is not estimated.
+  std::optional<slam::CalibrationEstimate> calibration;
 };
 
 }  // namespace irslam::robot

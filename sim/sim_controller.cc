@@ -244,7 +244,19 @@ nlohmann::json SimController::Truth() const {
           {"odometry", od},
           {"collisions", collisions_},
           {"collision_points", collision_points_},
-          {"min_clearance", min_clearance_}};
+          {"min_clearance", min_clearance_},
+          // The odometry's true systematic errors (world noise keys) and, as the
+          // SLAM estimates them (status slam.calibration, the map's
+          // "calibration"), the scale factors of the nominal left/right wheel
+          // radius and track width.
+          {"odometry_calibration",
+           {{"wheel_radius_error_left", world_.noise.wheel_radius_error_left},
+            {"wheel_radius_error_right", world_.noise.wheel_radius_error_right},
+            {"wheel_base_error", world_.noise.wheel_base_error},
+            {"scale",
+             {1 + world_.noise.wheel_radius_error_left, 1 + world_.noise.wheel_radius_error_right,
+              1 + world_.noise.wheel_base_error}},
+            {"ratio", (1 + world_.noise.wheel_radius_error_right) / (1 + world_.noise.wheel_radius_error_left)}}}};
 }
 
 }  // namespace irslam::sim

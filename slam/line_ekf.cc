@@ -62,7 +62,47 @@ double AngleModHalfPi(double a) {
   return a;
 }
 
-LineEkf::LineEkf() : x_(Eigen::VectorXd::Zero(3)), P_(Eigen::MatrixXd::Zero(3, 3)) {}
+LineEkf::LineEkf() : x_(Eigen::VectorXd::Zero(kFirstLine)), P_(Eigen::MatrixXd::Zero(kFirstLine, kFirstLine)) {
+  x_.segment<3>(kCalib).setOnes();
+}
+
+void LineEkf::SetCalibration(const OdometryCalibration& c, const Eigen::Vector3d& sigma) {
+  x_.segment<3>(kCalib) << c.left, c.right, c.base;
+  P_.middleRows<3>(kCalib).setZero();
+  P_.middleCols<3>(kCalib).setZero();
+  P_.block<3, 3>(kCalib, kCalib) = sigma.cwiseAbs2().asDiagonal();
+}
+
+void LineEkf::Predict(const WheelMotion& w, double wheel_base_m, const MotionNoise& noise,
+                      double calib_var_per_m, double min_sigma) {
+  const Pose2 p = pose();
+  const OdometryCalibration c = calibration();
+  const Motion m = Odometry::Calibrated(w, wheel_base_m, c);
+  // F = d(pose', calib') / d(pose, calib) = [F_pose, G_motion J_calib; 0, I].
+  Eigen::Matrix<double, 6, 6> f = Eigen::Matrix<double, 6, 6>::Identity();
+  f.topLeftCorner<3, 3>() = Odometry::JacobianPose(p, m);
+  f.topRightCorner<3, 3>() =
+      Odometry::JacobianMotion(p, m) * Odometry::JacobianCalibration(w, wheel_base_m, c);
+  const Pose2 n = Odometry::Apply(p, m);
+  x_(0) = n.x;
+  x_(1) = n.y;
+  x_(2) = n.theta;
+  const long rest = x_.size() - kFirstLine;
+  Eigen::Matrix<double, 6, 6> top = f * P_.topLeftCorner<6, 6>() * f.transpose();
+  top.topLeftCorner<3, 3>() += Odometry::ProcessNoise(p, m, noise);
+  // The parameters' random walk (only those being estimated: a zero variance
+  // means fixed), with their sigma kept at least min_sigma.
+  const double walk = calib_var_per_m * std::abs(m.ds);
+  for (int k = kCalib; k < kCalib + 3; ++k) {
+    if (top(k, k) <= 0) continue;
+    top(k, k) = std::max(top(k, k) + walk, min_sigma * min_sigma);
+  }
+  P_.topLeftCorner<6, 6>() = top;
+  if (rest > 0) {
+    P_.topRightCorner(3, rest) = f.topRows<3>() * P_.topRightCorner(6, rest);
+    P_.bottomLeftCorner(rest, 3) = P_.topRightCorner(3, rest).transpose();
+  }
+}
 
 void LineEkf::Predict(const Motion& m, const MotionNoise& noise) {
   const Pose2 p = pose();
@@ -95,11 +135,11 @@ int LineEkf::AddLine(const LineObservation& z, const Eigen::Matrix2d& r) {
   P_.block(n, 0, 2, n) = cross;
   P_.block(0, n, n, 2) = cross.transpose();
   P_.block<2, 2>(n, n) = gp * P_.topLeftCorner<3, 3>() * gp.transpose() + gz * r * gz.transpose();
-  return static_cast<int>((n - 3) / 2);
+  return static_cast<int>((n - kFirstLine) / 2);
 }
 
 void LineEkf::RemoveLine(int i) {
-  const long at = 3 + 2 * i, n = x_.size(), tail = n - at - 2;
+  const long at = RhoIndex(i), n = x_.size(), tail = n - at - 2;
   x_.segment(at, tail) = x_.tail(tail).eval();
   x_.conservativeResize(n - 2);
   Eigen::MatrixXd p(n - 2, n - 2);
@@ -197,7 +237,7 @@ void LineEkf::NormalizeAllLines() {
 }
 
 void LineEkf::NormalizeLineState(int i) {
-  const long at = 3 + 2 * i;
+  const long at = RhoIndex(i);
   if (x_(at) < 0) {
     x_(at) = -x_(at);
     x_(at + 1) += M_PI;

@@ -1,5 +1,11 @@
 // The geometrically constrained EKF (paper §4): state x = [rx, ry, rtheta,
-// rho_1, theta_1, ..., rho_N, theta_N] with full covariance P, eq. (9).
+// kl, kr, kb, rho_1, theta_1, ..., rho_N, theta_N] with full covariance P: the
+// paper's eq. (9) augmented with the odometry's systematic parameters (wheel
+// radius and track width scale factors, slam/odometry.h OdometryCalibration),
+// estimated from the line observations as the robot drives: simultaneous
+// localisation and odometry self-calibration (Martinelli, Tomatis & Siegwart,
+// IEEE T-RO 2007; Kuemmerle, Grisetti & Burgard, IROS 2011). They sit between the
+// pose and the lines (indices 3..5); with zero covariance they stay fixed.
 // Models are free functions (tested against finite differences); LineEkf holds
 // the state and applies prediction, measurement and pseudo-measurement updates
 // (Joseph form), landmark insertion (inverse model) and deletion.
@@ -45,16 +51,35 @@ class LineEkf {
  public:
   LineEkf();
 
-  int num_lines() const { return static_cast<int>((x_.size() - 3) / 2); }
+  // State layout: pose, calibration, lines.
+  static constexpr int kCalib = 3;     // kl, kr, kb at 3, 4, 5
+  static constexpr int kFirstLine = 6;
+  static constexpr int RhoIndex(int i) { return kFirstLine + 2 * i; }
+  static constexpr int ThetaIndex(int i) { return kFirstLine + 1 + 2 * i; }
+
+  int num_lines() const { return static_cast<int>((x_.size() - kFirstLine) / 2); }
   Pose2 pose() const { return {x_(0), x_(1), x_(2)}; }
-  double rho(int i) const { return x_(3 + 2 * i); }
-  double theta(int i) const { return x_(4 + 2 * i); }
+  OdometryCalibration calibration() const { return {x_(kCalib), x_(kCalib + 1), x_(kCalib + 2)}; }
+  Eigen::Matrix3d CalibrationCov() const { return P_.block<3, 3>(kCalib, kCalib); }
+  double rho(int i) const { return x_(RhoIndex(i)); }
+  double theta(int i) const { return x_(ThetaIndex(i)); }
   const Eigen::VectorXd& x() const { return x_; }
   const Eigen::MatrixXd& P() const { return P_; }
-  Eigen::Matrix2d LineCov(int i) const { return P_.block<2, 2>(3 + 2 * i, 3 + 2 * i); }
+  Eigen::Matrix2d LineCov(int i) const { return P_.block<2, 2>(RhoIndex(i), RhoIndex(i)); }
 
-  // Prediction with an odometry motion (robot block and its cross-covariances).
+  // Sets the calibration parameters and their (diagonal) sigmas; only before the
+  // first line (their cross-covariances are zeroed).
+  void SetCalibration(const OdometryCalibration& c, const Eigen::Vector3d& sigma);
+  // Prediction with an odometry motion (robot block and its cross-covariances);
+  // the calibration is not used.
   void Predict(const Motion& m, const MotionNoise& noise);
+  // Prediction with the wheels' nominal travel: the motion is calibrated with the
+  // state's parameters (slam/odometry.h Calibrated) and the pose's Jacobian
+  // includes them; the parameters get a random walk of calib_var_per_m per metre
+  // travelled, and their sigma is kept at least min_sigma (only where they have
+  // one: fixed parameters stay fixed).
+  void Predict(const WheelMotion& w, double wheel_base_m, const MotionNoise& noise, double calib_var_per_m,
+               double min_sigma);
   // Appends a line from an observation (inverse model); returns its index.
   int AddLine(const LineObservation& z, const Eigen::Matrix2d& r);
   // Removes line i's rows and columns.

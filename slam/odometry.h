@@ -1,6 +1,13 @@
 // Wheel odometry for a differential-drive robot: cumulative encoder counts in,
-// pose increments out. Also the motion noise model used to grow the pose
-// covariance (noise growing with distance travelled and angle turned).
+// wheel travel and pose increments out. Also the motion noise model used to grow
+// the pose covariance (noise growing with distance travelled and angle turned),
+// and the odometry's systematic parameters (OdometryCalibration): the scale
+// factors of the two wheel radii and of the track width, estimated in the EKF
+// state as the robot drives (simultaneous localisation and odometry
+// self-calibration: A. Martinelli, N. Tomatis, R. Siegwart, "Simultaneous
+// localization and odometry self calibration for mobile robot", Autonomous Robots
+// 22(1), 2007 and IEEE T-RO 2007; R. Kuemmerle, G. Grisetti, W. Burgard,
+// "Simultaneous calibration, localization, and mapping", IROS 2011).
 #ifndef IRSLAM_SLAM_ODOMETRY_H_
 #define IRSLAM_SLAM_ODOMETRY_H_
 
@@ -26,6 +33,35 @@ struct Motion {
   double dtheta = 0;  // rotation
 };
 
+// The wheels' travel over one encoder interval, by the nominal geometry.
+struct WheelMotion {
+  double dl = 0, dr = 0;
+};
+
+// The odometry's systematic parameters, as scale factors of the nominal geometry:
+// true left/right wheel radius = nominal * left/right, true track width = nominal
+// * base. Three, because that is what differs on a real robot (UMBmark's E_d and
+// E_b: the two tyres wear and compress differently, the contact patches set the
+// effective track) and all three are observable from line features: the mean of
+// left and right scales the distance (ranges to walls met at an angle), their
+// difference bends straight runs, and (left + right) / base scales turns
+// (the angles of walls seen before and after a corner).
+struct OdometryCalibration {
+  double left = 1, right = 1, base = 1;
+  double ratio() const { return right / left; }  // right / left wheel radius
+};
+
+// Config section [slam.calibration].
+struct CalibrationOptions {
+  bool enabled = true;            // false: the nominal geometry, fixed (the parameters are not estimated)
+  double prior_sigma_wheel = 0.01;  // 1-sigma of each wheel radius scale at the start (no saved value)
+  double prior_sigma_base = 0.03;   // 1-sigma of the track width scale at the start
+  double resume_sigma = 0.002;    // added (in quadrature) to a saved value's sigma when a mission starts from it
+  double random_walk_per_m = 1e-7;  // variance of each scale added per metre travelled (floor changes, wear)
+  double min_sigma = 2e-4;        // the parameters' sigma never falls below this (the filter stays open)
+};
+options::Table<CalibrationOptions> CalibrationKeys();
+
 // Config section [slam] (odometry noise keys).
 options::Table<MotionNoise> MotionNoiseKeys();
 
@@ -33,8 +69,13 @@ class Odometry {
  public:
   explicit Odometry(RobotGeometry geometry) : geometry_(geometry) {}
 
-  // Returns the motion since the previous ticks (nullopt for the first sample).
-  std::optional<Motion> Add(const WheelTicks& ticks);
+  // Returns the wheels' nominal travel since the previous ticks (nullopt for the
+  // first sample); the dead-reckoned pose advances by the motion calibrated with c.
+  std::optional<WheelMotion> Add(const WheelTicks& ticks, const OdometryCalibration& c = {});
+  // The pose increment of wheel travel w under calibration c.
+  Motion ToMotion(const WheelMotion& w, const OdometryCalibration& c = {}) const {
+    return Calibrated(w, geometry_.wheel_base_m, c);
+  }
   // Dead-reckoned pose in the odometry frame (starts at the origin).
   const Pose2& pose() const { return pose_; }
   double distance_m() const { return distance_m_; }
@@ -45,6 +86,14 @@ class Odometry {
   // Jacobians of Apply with respect to the pose (3x3) and process noise Q for m.
   static Eigen::Matrix3d JacobianPose(const Pose2& p, const Motion& m);
   static Eigen::Matrix3d ProcessNoise(const Pose2& p, const Motion& m, const MotionNoise& n);
+  // Jacobian of Apply with respect to the motion (ds, dtheta) (3x2).
+  static Eigen::Matrix<double, 3, 2> JacobianMotion(const Pose2& p, const Motion& m);
+  // The motion of wheel travel w with track width wheel_base_m under calibration c:
+  // ds = (kl dl + kr dr) / 2, dtheta = (kr dr - kl dl) / (kb b); and its Jacobian
+  // with respect to (kl, kr, kb) (2x3).
+  static Motion Calibrated(const WheelMotion& w, double wheel_base_m, const OdometryCalibration& c);
+  static Eigen::Matrix<double, 2, 3> JacobianCalibration(const WheelMotion& w, double wheel_base_m,
+                                                         const OdometryCalibration& c);
 
  private:
   RobotGeometry geometry_;

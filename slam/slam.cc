@@ -22,7 +22,29 @@ Eigen::Vector2d Normal(double theta) { return {std::cos(theta), std::sin(theta)}
 
 }  // namespace
 
-Slam::Slam(SlamOptions options) : options_(options), odometry_(options.geometry) {}
+Slam::Slam(SlamOptions options) : options_(options), odometry_(options.geometry) {
+  // The odometry's parameters start from a saved calibration if there is one
+  // (its sigma widened by resume_sigma), else nominal with the prior sigmas;
+  // disabled: the saved values (or nominal) with zero variance, i.e. fixed.
+  const CalibrationOptions& co = options_.calibration;
+  OdometryCalibration start;
+  Eigen::Vector3d sigma(co.prior_sigma_wheel, co.prior_sigma_wheel, co.prior_sigma_base);
+  if (options_.initial_calibration) {
+    start = options_.initial_calibration->value;
+    const Eigen::Vector3d& s = options_.initial_calibration->sigma;
+    sigma = (s.cwiseAbs2().array() + co.resume_sigma * co.resume_sigma).sqrt();
+  }
+  if (!co.enabled) sigma.setZero();
+  ekf_.SetCalibration(start, sigma);
+}
+
+CalibrationEstimate Slam::calibration() const {
+  const Eigen::Matrix3d c = ekf_.CalibrationCov();
+  const OdometryCalibration v = ekf_.calibration();
+  // ratio = right / left: d ratio = (-right / left^2, 1 / left, 0) d(kl, kr, kb).
+  const Eigen::Vector3d j(-v.right / (v.left * v.left), 1 / v.left, 0);
+  return {v, c.diagonal().cwiseMax(0).cwiseSqrt(), std::sqrt(std::max(0.0, j.dot(c * j)))};
+}
 
 double Slam::map_rotation() const {
   return ekf_.num_lines() > 0 ? NormalizeAngle(M_PI / 2 - ekf_.theta(0)) : 0.0;
@@ -66,7 +88,7 @@ int Slam::IndexOf(int id) const {
 }
 
 void Slam::AddWheelTicks(const WheelTicks& ticks) {
-  const std::optional<Motion> m = odometry_.Add(ticks);
+  const std::optional<WheelMotion> m = odometry_.Add(ticks, ekf_.calibration());
   odom_history_.emplace_back(ticks.t, odometry_.pose());
   while (odom_history_.size() > 2 && odom_history_.front().first < ticks.t - 0.5) {
     odom_history_.pop_front();
@@ -75,7 +97,8 @@ void Slam::AddWheelTicks(const WheelTicks& ticks) {
     trajectory_.push_back({ticks.t, ekf_.pose()});
     return;
   }
-  ekf_.Predict(*m, options_.motion_noise);
+  ekf_.Predict(*m, options_.geometry.wheel_base_m, options_.motion_noise,
+               options_.calibration.random_walk_per_m, options_.calibration.min_sigma);
   if (trajectory_.empty() || ticks.t - trajectory_.back().t >= options_.trajectory_period_s) {
     trajectory_.push_back({ticks.t, ekf_.pose()});
   }
@@ -179,8 +202,8 @@ void Slam::AppendConstraintRows(int index, std::vector<Eigen::RowVectorXd>* h,
   const double sc = options_.association.constraint_sigma_rad;
   // Eq. (11): theta_1 - theta_k (- pi/2) = 0, for parallel and orthogonal lines alike.
   Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(n);
-  row(4 + 2 * index) = 1;
-  row(4) = -1;
+  row(LineEkf::ThetaIndex(index)) = 1;
+  row(LineEkf::ThetaIndex(0)) = -1;
   h->push_back(row);
   y->push_back(-AngleModHalfPi(ekf_.theta(index) - ekf_.theta(0)));
   r->push_back(sc * sc);
@@ -189,10 +212,10 @@ void Slam::AppendConstraintRows(int index, std::vector<Eigen::RowVectorXd>* h,
   if (partner >= 0) {
     const double sr = options_.association.collinear_sigma_m;
     Eigen::RowVectorXd rr = Eigen::RowVectorXd::Zero(n), rt = Eigen::RowVectorXd::Zero(n);
-    rr(3 + 2 * index) = 1;
-    rr(3 + 2 * partner) = -1;
-    rt(4 + 2 * index) = 1;
-    rt(4 + 2 * partner) = -1;
+    rr(LineEkf::RhoIndex(index)) = 1;
+    rr(LineEkf::RhoIndex(partner)) = -1;
+    rt(LineEkf::ThetaIndex(index)) = 1;
+    rt(LineEkf::ThetaIndex(partner)) = -1;
     h->push_back(rr);
     y->push_back(-(ekf_.rho(index) - ekf_.rho(partner)));
     r->push_back(sr * sr);
@@ -237,7 +260,7 @@ int Slam::InsertLine(const ExtractedLine& obs, int collinear_with_index) {
     // paper pins its angle (a near-zero-noise pseudo-measurement); optional here.
     if (options_.association.pin_first_line) {
       Eigen::MatrixXd h = Eigen::MatrixXd::Zero(1, ekf_.x().size());
-      h(0, 4) = 1;
+      h(0, LineEkf::ThetaIndex(0)) = 1;
       Eigen::MatrixXd rr(1, 1);
       rr(0, 0) = 1e-12;
       ekf_.Update(Eigen::VectorXd::Zero(1), h, rr);
@@ -333,11 +356,12 @@ void Slam::Associate(const ExtractedLine& obs) {
   const long n = ekf_.x().size();
   std::vector<Eigen::RowVectorXd> rows;
   std::vector<double> y, r;
+  double r_scale = 1;  // > 1 only for a gate recovery
   for (int k = 0; k < 2; ++k) {
     Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(n);
     row.head<3>() = j.row(k).head<3>();
-    row(3 + 2 * best) = j(k, 3);
-    row(4 + 2 * best) = j(k, 4);
+    row(LineEkf::RhoIndex(best)) = j(k, 3);
+    row(LineEkf::ThetaIndex(best)) = j(k, 4);
     rows.push_back(row);
   }
   y.push_back(obs.rho - zhat.rho);
@@ -351,9 +375,16 @@ void Slam::Associate(const ExtractedLine& obs) {
     // H P H' from H's non-zero columns (not a pass over the whole of P).
     const Eigen::Matrix2d s = ekf_.ProjectedCov(hm) + obs.cov * ao.measurement_cov_scale;
     const Eigen::Vector2d yy(y[0], y[1]);
-    if (yy.dot(s.inverse() * yy) > ao.max_mahalanobis2) {
+    const double d2 = yy.dot(s.inverse() * yy);
+    if (d2 > ao.max_mahalanobis2) {
       ++stats_.rejected_gate;
-      return;
+      if (ao.gate_recovery_after <= 0 || ++gate_rejections_in_a_row_ < ao.gate_recovery_after) return;
+      // Locked out: use it with R scaled so that it sits on the gate.
+      gate_rejections_in_a_row_ = 0;
+      ++stats_.gate_recoveries;
+      r_scale = d2 / ao.max_mahalanobis2;
+    } else {
+      gate_rejections_in_a_row_ = 0;
     }
   }
   AppendConstraintRows(best, &rows, &y, &r);
@@ -361,7 +392,7 @@ void Slam::Associate(const ExtractedLine& obs) {
   Eigen::MatrixXd h(m, n);
   Eigen::VectorXd yy(m);
   Eigen::MatrixXd rr = Eigen::MatrixXd::Zero(m, m);
-  rr.topLeftCorner<2, 2>() = obs.cov * ao.measurement_cov_scale;
+  rr.topLeftCorner<2, 2>() = obs.cov * (ao.measurement_cov_scale * r_scale);
   for (long k = 0; k < m; ++k) {
     h.row(k) = rows[static_cast<size_t>(k)];
     yy(k) = y[static_cast<size_t>(k)];
@@ -395,10 +426,10 @@ void Slam::MergeOverlapping() {
         if (Overlap(i, lines_[static_cast<size_t>(k)].p0, lines_[static_cast<size_t>(k)].p1) <= 0) continue;
         const long n = ekf_.x().size();
         Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2, n);
-        h(0, 3 + 2 * i) = 1;
-        h(0, 3 + 2 * k) = -1;
-        h(1, 4 + 2 * i) = 1;
-        h(1, 4 + 2 * k) = -1;
+        h(0, LineEkf::RhoIndex(i)) = 1;
+        h(0, LineEkf::RhoIndex(k)) = -1;
+        h(1, LineEkf::ThetaIndex(i)) = 1;
+        h(1, LineEkf::ThetaIndex(k)) = -1;
         Eigen::VectorXd y(2);
         y << -dr, -dt;
         Eigen::MatrixXd r = Eigen::MatrixXd::Zero(2, 2);
@@ -459,6 +490,8 @@ options::Table<AssociationOptions> AssociationKeys() {
        "... and only to one at least this long (a wall, not a face)"},
       {"measurement_cov_scale", &A::measurement_cov_scale, 1e-6, 1e6, "", "multiplies the eq. (7) covariance"},
       {"max_mahalanobis2", &A::max_mahalanobis2, 0.1, 1e9, "", "innovation gate of a match (chi^2, 2 dof)"},
+      {"gate_recovery_after", &A::gate_recovery_after, 0, 1000, "",
+       "after this many gate rejections in a row, the next is used with its noise inflated onto the gate (0: never)"},
       {"use_constraints", &A::use_constraints, 0, 0, "", "false: plain EKF (comparison, Fig. 17)"},
       {"pin_first_line", &A::pin_first_line, 0, 0, "",
        "true: the paper's pinned theta_1 (less accurate, docs/accuracy.md)"},

@@ -22,6 +22,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <deque>
+#include <optional>
 #include <vector>
 
 #include "slam/line_ekf.h"
@@ -52,6 +53,11 @@ struct AssociationOptions {
   double collinear_min_length_m = 1.0;  // ... and only to a mapped line at least this long
   double measurement_cov_scale = 1.0; // multiplies the eq. (7) covariance
   double max_mahalanobis2 = 13.8;     // innovation gate of a match (chi2, 2 dof, 99.9 %)
+  // After this many gate rejections in a row (0: never), the next match the gate
+  // rejects is used with its noise inflated to sit on the gate: the filter cannot
+  // be locked out by its own overconfidence after a bad stretch (slip, a floor
+  // change the calibration has not followed yet).
+  int gate_recovery_after = 0;
   bool use_constraints = true;        // off: plain EKF (for comparison, Fig. 17)
   // The paper pins theta_1 at its first observation. Off (default): line 1 is
   // estimated like the others (the start pose is known, so the frame is fixed
@@ -60,9 +66,21 @@ struct AssociationOptions {
   bool pin_first_line = false;
 };
 
+// The odometry calibration learnt (e.g. kept in a saved map): the scale factors
+// and their standard deviations (kl, kr, kb).
+struct CalibrationEstimate {
+  OdometryCalibration value;
+  Eigen::Vector3d sigma = Eigen::Vector3d::Zero();
+  double ratio_sigma = 0;  // of value.ratio() (from the full covariance; 0 when not known)
+};
+
 struct SlamOptions {
   RobotGeometry geometry;
   MotionNoise motion_noise;
+  CalibrationOptions calibration;  // [slam.calibration]
+  // Not a config key: the calibration a mission starts from (the saved map's,
+  // set by the daemon or the simulator); none: nominal with the prior sigmas.
+  std::optional<CalibrationEstimate> initial_calibration;
   std::array<SensorMount, kNumIrSensors> mounts{};
   double trajectory_period_s = 0.25;  // trajectory sampling (>= 2 Hz, contracts §4)
   PdsOptions pds;
@@ -91,12 +109,13 @@ struct SlamStats {
   int collinear_declined = 0;   // collinear by eq. (13) but not tied (offset, or short partner)
   int rejected_angle = 0;   // neither parallel nor orthogonal to line 1
   int rejected_gate = 0;    // matched by DH but inconsistent with the covariance
+  int gate_recoveries = 0;  // rejected matches used anyway, noise inflated (gate_recovery_after)
   int merges = 0;
   int loop_closures = 0;    // merges into the first line
 };
 
 // Config section [slam]: SlamKeys() (with MotionNoiseKeys()), and its
-// subsections [slam.pds], [slam.association].
+// subsections [slam.pds], [slam.association], [slam.calibration] (CalibrationKeys()).
 options::Table<SlamOptions> SlamKeys();
 options::Table<PdsOptions> PdsKeys();
 options::Table<AssociationOptions> AssociationKeys();
@@ -127,6 +146,8 @@ class Slam {
   double distance_m() const { return odometry_.distance_m(); }
   double time() const { return odometry_.last_t(); }
   const SlamStats& stats() const { return stats_; }
+  // The odometry's estimated systematic parameters and their sigmas.
+  CalibrationEstimate calibration() const;
   // The lines extracted from the last closed PDS window (robot frame), e.g. for
   // recording observations for the Appendix 1 weights.
   const std::vector<ExtractedLine>& last_window_lines() const { return last_window_lines_; }
@@ -160,6 +181,7 @@ class Slam {
   SlamStats stats_;
   std::vector<ExtractedLine> last_window_lines_;
   int next_id_ = 1;
+  int gate_rejections_in_a_row_ = 0;
 
   // Recent odometry poses (for scans stamped between encoder frames) and scans
   // waiting for the odometry to reach their time.

@@ -27,13 +27,13 @@ struct Problem {
 // entry through the pose). Built directly: N AddLine calls would copy P N times.
 Problem MakeProblem(int n_lines) {
   Problem p;
-  const long n = 3 + 2L * n_lines;
+  const long n = LineEkf::kFirstLine + 2L * n_lines;
   Eigen::VectorXd& x = p.ekf.mutable_x();
   x = Eigen::VectorXd::Zero(n);
-  x.head<3>() << 0.3, -0.2, 0.1;
+  x.head<6>() << 0.3, -0.2, 0.1, 1, 1, 1;
   for (int i = 0; i < n_lines; ++i) {
-    x(3 + 2 * i) = 0.5 + 0.1 * i;
-    x(4 + 2 * i) = (i % 4) * M_PI / 2 - M_PI / 2 + 0.01;
+    x(LineEkf::RhoIndex(i)) = 0.5 + 0.1 * i;
+    x(LineEkf::ThetaIndex(i)) = (i % 4) * M_PI / 2 - M_PI / 2 + 0.01;
   }
   Eigen::MatrixXd g(n, 3);
   for (long i = 0; i < n; ++i) {
@@ -46,9 +46,9 @@ Problem MakeProblem(int n_lines) {
   Eigen::Matrix<double, 2, 5> j;
   PredictObservation(p.ekf.pose(), p.ekf.rho(k), p.ekf.theta(k), &j);
   p.h.leftCols<3>() = j.leftCols<3>();
-  p.h.middleCols<2>(3 + 2 * k) = j.rightCols<2>();
-  p.h(2, 4 + 2 * k) = 1;
-  p.h(2, 4) = -1;
+  p.h.middleCols<2>(LineEkf::RhoIndex(k)) = j.rightCols<2>();
+  p.h(2, LineEkf::ThetaIndex(k)) = 1;
+  p.h(2, LineEkf::ThetaIndex(0)) = -1;
   p.r = Eigen::MatrixXd::Zero(3, 3);
   p.r.topLeftCorner<2, 2>() = r;
   p.r(2, 2) = 1e-6;

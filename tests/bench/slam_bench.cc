@@ -87,11 +87,11 @@ void BM_EkfUpdate(benchmark::State& state) {
   PredictObservation(ekf.pose(), ekf.rho(k), ekf.theta(k), &j);
   for (int row = 0; row < 2; ++row) {
     h.row(row).head<3>() = j.row(row).head<3>();
-    h(row, 3 + 2 * k) = j(row, 3);
-    h(row, 4 + 2 * k) = j(row, 4);
+    h(row, LineEkf::RhoIndex(k)) = j(row, 3);
+    h(row, LineEkf::ThetaIndex(k)) = j(row, 4);
   }
-  h(2, 4 + 2 * k) = 1;
-  h(2, 4) = -1;
+  h(2, LineEkf::ThetaIndex(k)) = 1;
+  h(2, LineEkf::ThetaIndex(0)) = -1;
   Eigen::MatrixXd rr = Eigen::MatrixXd::Zero(3, 3);
   rr.topLeftCorner<2, 2>() = r;
   rr(2, 2) = 1e-6;

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -101,7 +102,26 @@ RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::Core
   s.seed = seed;
   s.profile = profile;
   s.world = world.name;
-  sim::InProcessRun run = sim::RunInProcess(world, options, seed, max_time_s);
+  // The calibration at the end of the first loop: the first tick the mission is
+  // past wall_follow.
+  bool followed = false;
+  std::optional<slam::CalibrationEstimate> at_loop;
+  const auto on_tick = [&](const sim::InProcessRun& r) {
+    if (at_loop) return;
+    const control::MissionState st = r.core->state();
+    if (st == control::MissionState::kWallFollow) {
+      followed = true;
+    } else if (followed) {
+      at_loop = r.core->slam().calibration();
+    }
+  };
+  sim::InProcessRun run = sim::RunInProcess(world, options, seed, max_time_s, on_tick);
+  {
+    const slam::CalibrationEstimate c = at_loop ? *at_loop : run.core->slam().calibration();
+    const double truth = (1 + world.noise.wheel_radius_error_right) / (1 + world.noise.wheel_radius_error_left);
+    s.ratio_error = c.value.ratio() / truth - 1;
+    s.ratio_at_loop = at_loop.has_value();
+  }
   s.done = run.core->state() == control::MissionState::kDone;
   s.end_state = control::ToString(run.core->state());
   s.robot_time_s = run.t;
@@ -154,9 +174,10 @@ Rates Summarise(const std::vector<RunScore>& runs) {
     pieces += s.pieces, good += s.good, complete += s.complete, contacts += s.contacts_furniture;
     r.pose_ok += s.final_position_m <= 0.05 && std::abs(s.final_heading_rad) <= 2 / kDeg;
     r.lost += s.max_position_m > 0.20;
+    r.ratio_within += std::abs(s.ratio_error) <= 1e-3;
   }
   const double n = static_cast<double>(runs.size());
-  r.done /= n, r.pose_ok /= n, r.lost /= n;
+  r.done /= n, r.pose_ok /= n, r.lost /= n, r.ratio_within /= n;
   r.pieces_good = pieces ? static_cast<double>(good) / pieces : 1.0;
   r.pieces_complete = pieces ? static_cast<double>(complete) / pieces : 1.0;
   r.furniture_contacts_per_run = contacts / n;
@@ -209,7 +230,8 @@ std::string RobustnessReport(const std::vector<std::vector<RunScore>>& by_profil
                             {"pieces complete", 0.95, 0.90, -1, false},
                             {"final position <= 5 cm and heading <= 2 deg", 0.95, 0.90, 0.75, false},
                             {"runs lost (pose error ever > 20 cm)", 0.0, 0.01, 0.05, true},
-                            {"contacts with furniture (not clutter) per run", 0.05, 0.1, -1, true}};
+                            {"contacts with furniture (not clutter) per run", 0.05, 0.1, -1, true},
+                            {"wheel radius ratio estimated within 0.1 % after one loop", -1, 0.95, -1, false}};
   md << "## Rates against the targets (issue 11)\n\n| | ";
   for (const auto& runs : by_profile) md << (runs.empty() ? "?" : sim::ToString(runs[0].profile)) << " (" << runs.size() << " runs) | target | ";
   md << "\n|---|";
@@ -219,7 +241,8 @@ std::string RobustnessReport(const std::vector<std::vector<RunScore>>& by_profil
     md << "| " << targets[t].name << " | ";
     for (const auto& runs : by_profile) {
       const Rates r = Summarise(runs);
-      const double v[] = {r.done, r.pieces_good, r.pieces_complete, r.pose_ok, r.lost, r.furniture_contacts_per_run};
+      const double v[] = {r.done,    r.pieces_good, r.pieces_complete,           r.pose_ok,
+                          r.lost,    r.furniture_contacts_per_run, r.ratio_within};
       const sim::NoiseProfile p = runs.empty() ? sim::NoiseProfile::kNominal : runs[0].profile;
       const double target = p == sim::NoiseProfile::kNominal     ? targets[t].nominal
                             : p == sim::NoiseProfile::kRealistic ? targets[t].realistic
@@ -232,7 +255,23 @@ std::string RobustnessReport(const std::vector<std::vector<RunScore>>& by_profil
     }
     md << "\n";
   }
-  md << "\nBold: the target is not met.\n\n## Failure classes\n\nA run can have several.\n\n| class |";
+  md << "\nBold: the target is not met. *Ratio*: the wheel radius ratio (right/left) the odometry "
+        "self-calibration estimated (status `slam.calibration`) when the mission first left `wall_follow` (the "
+        "first loop closed), against the world's `wheel_radius_error_left/right`; for runs that never got there, "
+        "at the end (";
+  for (size_t p = 0; p < by_profile.size(); ++p) {
+    int fallback = 0;
+    std::vector<double> errors;
+    for (const auto& s : by_profile[p]) {
+      fallback += !s.ratio_at_loop;
+      errors.push_back(std::abs(s.ratio_error));
+    }
+    std::sort(errors.begin(), errors.end());
+    const double median = errors.empty() ? 0 : errors[errors.size() / 2];
+    md << (p ? "; " : "") << (by_profile[p].empty() ? "?" : sim::ToString(by_profile[p][0].profile)) << ": "
+       << fallback << " runs, median |error| " << F(100 * median, 3) << " %";
+  }
+  md << ").\n\n## Failure classes\n\nA run can have several.\n\n| class |";
   for (const auto& runs : by_profile) md << " " << (runs.empty() ? "?" : sim::ToString(runs[0].profile)) << " |";
   md << "\n|---|";
   for (size_t i = 0; i < by_profile.size(); ++i) md << "---|";
@@ -267,6 +306,20 @@ std::string RobustnessReport(const std::vector<std::vector<RunScore>>& by_profil
   std::ofstream(out_dir + "/robustness_robot_time.svg")
       << report::LineChart("Robot time of the mission (runs per 50 s bin)", "s", "runs", time);
   md << "\n![final position error](robustness_final_error.svg)\n\n![robot time](robustness_robot_time.svg)\n\n";
+  md << "## Odometry self-calibration\n\n"
+        "The EKF estimates the scale factors of the left and right wheel radius and of the track width "
+        "(README, SLAM item 9; options `[slam.calibration]`), the systematic errors the profiles draw "
+        "(`wheel_radius_error_left/right`, `wheel_base_error`). The ratio row of the table above scores it "
+        "(target of issue 11: realistic >= 95 %). The campaign without it is the same command with "
+        "`slam.calibration.enabled = false` in the configuration; its numbers (before the calibration: "
+        "docs/robustness.md of commit bd2fbb8, 100 runs per profile) were lost 13 / 96 / 100 % and done "
+        "87 / 56 / 22 % for nominal / realistic / harsh.\n\n"
+        "Why the ratio target is out of reach on the realistic and harsh profiles: their slip is an "
+        "Ornstein-Uhlenbeck process per wheel (sigma 0.5-2 % or 0.5-4 %, correlation 0.5-3 s, zero mean), and "
+        "its mean over a loop of T seconds has a sigma of sigma_slip sqrt(2 tau / T): for 1.25 %, 1.75 s and "
+        "150 s about 0.19 % per wheel, 0.27 % on the ratio. Over that loop it is indistinguishable from a "
+        "radius error, so no estimate of a constant ratio can be within 0.1 % in 95 % of these runs (the "
+        "median error above is of that size); with the nominal profile's white slip it is.\n\n";
   md << "## Every failing run, and how to reproduce it\n\n"
      << "| profile | seed | world | end | robot time s | pieces good/complete/all | final cm | max cm | contacts "
         "(furniture/clutter) | failures | reproduce |\n|---|---|---|---|---|---|---|---|---|---|---|\n";

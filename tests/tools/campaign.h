@@ -30,6 +30,12 @@ struct RunScore {
   double odom_final_position_m = 0;
   int contacts_furniture = 0;    // contacts with walls or furniture
   int contacts_clutter = 0;      // contacts with legs and posts (<= 6 cm)
+  // Odometry self-calibration: the estimated wheel radius ratio (right/left)
+  // against the world's true one, relative, at the end of the first
+  // wall-following loop (the mission leaves wall_follow), or at the end of the
+  // run when that never happened (ratio_at_loop false).
+  double ratio_error = 0;
+  bool ratio_at_loop = false;
   std::vector<std::string> failures;  // the failure classes of this run (empty: a good run)
 };
 
@@ -47,6 +53,7 @@ struct Rates {
   int runs = 0;
   double done = 0, pieces_good = 0, pieces_complete = 0, pose_ok = 0, lost = 0;
   double furniture_contacts_per_run = 0;
+  double ratio_within = 0;  // runs whose ratio_error is within 0.1 %
 };
 Rates Summarise(const std::vector<RunScore>& runs);
 

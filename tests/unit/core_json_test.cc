@@ -13,6 +13,8 @@
 #include <sstream>
 
 #include "daemon/core_json.h"
+#include "daemon/map_store.h"
+#include "daemon/map_validate.h"
 #include "robot/robot_core.h"
 #include "sim/sim_run.h"
 
@@ -114,6 +116,63 @@ TEST(CoreJsonTest, AMapWithoutARoomBoxAndAnObjectWithANote) {
   EXPECT_EQ(j["pose_cov"].dump(), "[[0.0,0.0,0.0],[0.0,0.0,0.0],[0.0,0.0,0.0]]");
   EXPECT_TRUE(j["lines"].is_array());
   EXPECT_TRUE(j["lines"].empty());
+}
+
+// The odometry calibration goes into the map and comes back out of a saved
+// map file (the next mission starts from it); maps without it still load.
+TEST(CoreJsonTest, TheMapKeepsTheOdometryCalibrationThroughTheMapFile) {
+  robot::MapSnapshot m;
+  m.calibration = slam::CalibrationEstimate{{1.0043, 0.9941, 1.0178}, Eigen::Vector3d(4e-3, 4e-3, 2e-3), 3e-4};
+  const nlohmann::json j = ToJson(m);
+  EXPECT_EQ(j["calibration"]["scale"].dump(), "[1.0043,0.9941,1.0178]");
+  EXPECT_EQ(j["calibration"]["std"].dump(), "[0.004,0.004,0.002]");
+  EXPECT_EQ(j["calibration"]["ratio"].get<double>(), 0.9941 / 1.0043);
+  EXPECT_EQ(j["calibration"]["ratio_std"].get<double>(), 3e-4);
+  std::string error;
+  EXPECT_TRUE(ValidateMapBody(j, &error)) << error;
+  const std::string text = EncodeMapFile({3, "stop", j});
+  const auto back = DecodeMapFile(text, &error);
+  ASSERT_TRUE(back) << error;
+  const auto c = CalibrationFromMap(back->map);
+  ASSERT_TRUE(c);
+  EXPECT_EQ(c->value.left, 1.0043);  // exactly: the numbers survive the file
+  EXPECT_EQ(c->value.right, 0.9941);
+  EXPECT_EQ(c->value.base, 1.0178);
+  EXPECT_EQ(c->sigma, Eigen::Vector3d(4e-3, 4e-3, 2e-3));
+  EXPECT_EQ(c->ratio_sigma, 3e-4);
+  // A map without it (an older file, or calibration disabled): valid, none.
+  m.calibration.reset();
+  const nlohmann::json old = ToJson(m);
+  EXPECT_FALSE(old.contains("calibration"));
+  EXPECT_TRUE(ValidateMapBody(old, &error)) << error;
+  EXPECT_FALSE(CalibrationFromMap(old));
+  // Wrong types are a one-line error; values out of bounds are not used.
+  nlohmann::json bad = j;
+  bad["calibration"]["scale"] = {1.0, 1.0};
+  EXPECT_FALSE(ValidateMapBody(bad, &error));
+  EXPECT_EQ(error, "map.calibration.scale: not an array of 3 numbers");
+  EXPECT_FALSE(CalibrationFromMap(bad));
+  bad = j;
+  bad["calibration"]["scale"][2] = 2.5;
+  EXPECT_TRUE(ValidateMapBody(bad, &error)) << error;
+  EXPECT_FALSE(CalibrationFromMap(bad));
+}
+
+// A live core: its map and status carry the calibration it estimates.
+TEST(CoreJsonTest, StatusAndMapReportTheCalibration) {
+  robot::CoreOptions o = robot::DefaultCoreOptions();
+  o.slam.calibration.enabled = true;
+  o.slam.initial_calibration = slam::CalibrationEstimate{{1.01, 0.99, 1.02}, Eigen::Vector3d(1e-3, 1e-3, 2e-3), 0};
+  const robot::RobotCore core(o);
+  const nlohmann::json status = ToJson(core.Status(0));
+  EXPECT_EQ(status["slam"]["calibration"]["enabled"], true);
+  EXPECT_EQ(status["slam"]["calibration"]["scale"].dump(), "[1.01,0.99,1.02]");
+  EXPECT_NEAR(status["slam"]["calibration"]["ratio"].get<double>(), 0.99 / 1.01, 1e-15);
+  const auto c = CalibrationFromMap(ToJson(core.Map()));
+  ASSERT_TRUE(c);
+  EXPECT_EQ(c->value.right, 0.99);
+  o.slam.calibration.enabled = false;
+  EXPECT_FALSE(ToJson(robot::RobotCore(o).Map()).contains("calibration"));
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <boost/asio/io_context.hpp>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -118,6 +119,43 @@ TEST_F(DaemonMissionTest, AReloadAfterAMissionNeitherServesNorSavesAnEmptyMap) {
   ASSERT_TRUE(saved) << error;
   EXPECT_EQ(saved->seq, 1u);
   EXPECT_EQ(saved->map["lines"].size(), lines);
+}
+
+// The odometry calibration a mission learnt is kept in the saved map, carried
+// over a reload, and the next run of the daemon starts from it.
+TEST_F(DaemonMissionTest, TheOdometryCalibrationIsSavedCarriedOverAndStartedFrom) {
+  core_.slam.calibration.enabled = true;
+  std::ofstream(options_.config_path) << R"({"slam": {"calibration": {"enabled": true}}})";
+  Open();
+  Run(1);
+  ASSERT_TRUE(Call("start").contains("result"));
+  Run(15);
+  ASSERT_EQ(Call("stop")["result"]["map"], "saved");
+  const nlohmann::json learnt = daemon_->StatusJson()["slam"]["calibration"];
+  EXPECT_EQ(learnt["enabled"], true);
+  // It moved from the prior (1, 1, 1; sigma 0.01, 0.01, 0.03) while driving.
+  EXPECT_LT(learnt["std"][0].get<double>(), 0.01);
+  std::string error;
+  auto saved = MapStore(core_.state_dir).Load(&error);
+  ASSERT_TRUE(saved) << error;
+  ASSERT_TRUE(saved->map.contains("calibration"));
+  EXPECT_EQ(saved->map["calibration"]["scale"], learnt["scale"]);
+  // A reload: the new core starts from what the old one learnt.
+  std::ofstream(options_.config_path)
+      << R"({"control": {"period_s": 0.01}, "slam": {"calibration": {"enabled": true}}})";
+  daemon_->Reload();
+  const double resume = slam::CalibrationOptions{}.resume_sigma;
+  nlohmann::json now = daemon_->StatusJson()["slam"]["calibration"];
+  EXPECT_EQ(now["scale"], learnt["scale"]);
+  EXPECT_NEAR(now["std"][0].get<double>(), std::hypot(learnt["std"][0].get<double>(), resume), 1e-12);
+  EXPECT_EQ(daemon_->Shutdown(), 0);
+  // The next run of the daemon: from the saved map's.
+  daemon_.reset();
+  Open();
+  now = daemon_->StatusJson()["slam"]["calibration"];
+  EXPECT_EQ(now["scale"], saved->map["calibration"]["scale"]);
+  EXPECT_NEAR(now["std"][2].get<double>(),
+              std::hypot(saved->map["calibration"]["std"][2].get<double>(), resume), 1e-12);
 }
 
 // A config that comes during a mission applies when it ends (the mission's map

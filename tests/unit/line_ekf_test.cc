@@ -93,16 +93,18 @@ TEST(LineEkfTest, RemoveLineDeletesExactlyItsRowsAndColumns) {
   ekf.AddLine({2.0, 0.2}, r);
   ekf.AddLine({3.0, 0.3}, r);
   Eigen::MatrixXd& p = ekf.mutable_P();
-  for (int i = 0; i < 9; ++i) {
-    for (int j = 0; j < 9; ++j) p(i, j) = 100 * i + j;
+  for (int i = 0; i < 12; ++i) {
+    for (int j = 0; j < 12; ++j) p(i, j) = 100 * i + j;
   }
-  ekf.RemoveLine(1);
-  ASSERT_EQ(ekf.x().size(), 7);
+  ekf.RemoveLine(1);  // rows and columns 8 and 9
+  ASSERT_EQ(ekf.x().size(), 10);
   EXPECT_DOUBLE_EQ(ekf.rho(0), 1.0);
   EXPECT_DOUBLE_EQ(ekf.rho(1), 3.0);
-  EXPECT_DOUBLE_EQ(ekf.P()(5, 5), 100 * 7 + 7);  // old (7,7)
-  EXPECT_DOUBLE_EQ(ekf.P()(3, 6), 100 * 3 + 8);  // old (3,8)
-  EXPECT_DOUBLE_EQ(ekf.P()(6, 0), 100 * 8 + 0);
+  EXPECT_DOUBLE_EQ(ekf.x()(4), 1.0);               // the calibration stays
+  EXPECT_DOUBLE_EQ(ekf.P()(8, 8), 100 * 10 + 10);  // old (10,10)
+  EXPECT_DOUBLE_EQ(ekf.P()(3, 9), 100 * 3 + 11);   // old (3,11): calibration x line 2
+  EXPECT_DOUBLE_EQ(ekf.P()(9, 0), 100 * 11 + 0);
+  EXPECT_DOUBLE_EQ(ekf.P()(7, 5), 100 * 7 + 5);
 }
 
 // Two filters fed the same sequence as Slam feeds its filter: the first wall
@@ -142,15 +144,15 @@ TEST(LineEkfTest, InPlaceUpdateMatchesTheReference) {
     r->conservativeResize(m0 + extra, m0 + extra);
     r->bottomRows(extra).setZero();
     r->rightCols(extra).setZero();
-    (*h)(m0, 4 + 2 * i) = 1;
-    (*h)(m0, 4) = -1;
+    (*h)(m0, LineEkf::ThetaIndex(i)) = 1;
+    (*h)(m0, LineEkf::ThetaIndex(0)) = -1;
     (*y)(m0) = -AngleModHalfPi(fast.theta(i) - fast.theta(0));
     (*r)(m0, m0) = 1e-6;
     if (partner >= 0) {
-      (*h)(m0 + 1, 3 + 2 * i) = 1;
-      (*h)(m0 + 1, 3 + 2 * partner) = -1;
-      (*h)(m0 + 2, 4 + 2 * i) = 1;
-      (*h)(m0 + 2, 4 + 2 * partner) = -1;
+      (*h)(m0 + 1, LineEkf::RhoIndex(i)) = 1;
+      (*h)(m0 + 1, LineEkf::RhoIndex(partner)) = -1;
+      (*h)(m0 + 2, LineEkf::ThetaIndex(i)) = 1;
+      (*h)(m0 + 2, LineEkf::ThetaIndex(partner)) = -1;
       (*y)(m0 + 1) = -(fast.rho(i) - fast.rho(partner));
       (*y)(m0 + 2) = -NormalizeAngle(fast.theta(i) - fast.theta(partner));
       (*r)(m0 + 1, m0 + 1) = 1e-6;
@@ -170,13 +172,18 @@ TEST(LineEkfTest, InPlaceUpdateMatchesTheReference) {
   add_line();
   {
     Eigen::MatrixXd h = Eigen::MatrixXd::Zero(1, fast.x().size());
-    h(0, 4) = 1;
+    h(0, LineEkf::ThetaIndex(0)) = 1;
     update(Eigen::VectorXd::Zero(1), h, Eigen::MatrixXd::Constant(1, 1, 1e-12));
   }
+  // The odometry's calibration in the state too (estimated: a non-zero prior).
+  const Eigen::Vector3d calib_sigma(0.01, 0.01, 0.02);
+  fast.SetCalibration({1.002, 0.997, 1.01}, calib_sigma);
+  ref.SetCalibration({1.002, 0.997, 1.01}, calib_sigma);
   for (int step = 0; step < 400; ++step) {
-    const Motion motion{0.05 + 0.1 * uni(rng), 0.2 * noise(rng)};
-    fast.Predict(motion, MotionNoise{});
-    ref.Predict(motion, MotionNoise{});
+    const double ds = 0.05 + 0.1 * uni(rng), dtheta = 0.2 * noise(rng), track = 0.23;
+    const WheelMotion wheels{ds - 0.5 * track * dtheta, ds + 0.5 * track * dtheta};
+    fast.Predict(wheels, track, MotionNoise{}, 1e-7, 2e-4);
+    ref.Predict(wheels, track, MotionNoise{}, 1e-7, 2e-4);
     compare();
     const double u = uni(rng);
     const int lines = fast.num_lines();
@@ -191,10 +198,10 @@ TEST(LineEkfTest, InPlaceUpdateMatchesTheReference) {
       const int i = static_cast<int>(uni(rng) * (lines - 1));
       const int k = i + 1 + static_cast<int>(uni(rng) * (lines - 1 - i));
       Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2, fast.x().size());
-      h(0, 3 + 2 * i) = 1;
-      h(0, 3 + 2 * k) = -1;
-      h(1, 4 + 2 * i) = 1;
-      h(1, 4 + 2 * k) = -1;
+      h(0, LineEkf::RhoIndex(i)) = 1;
+      h(0, LineEkf::RhoIndex(k)) = -1;
+      h(1, LineEkf::ThetaIndex(i)) = 1;
+      h(1, LineEkf::ThetaIndex(k)) = -1;
       Eigen::VectorXd y(2);
       y << -0.02 * noise(rng), -0.01 * noise(rng);
       update(y, h, Eigen::MatrixXd::Identity(2, 2) * 1e-8);
@@ -208,7 +215,7 @@ TEST(LineEkfTest, InPlaceUpdateMatchesTheReference) {
       PredictObservation(fast.pose(), fast.rho(b), fast.theta(b), &j);
       Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2, fast.x().size());
       h.leftCols<3>() = j.leftCols<3>();
-      h.middleCols<2>(3 + 2 * b) = j.rightCols<2>();
+      h.middleCols<2>(LineEkf::RhoIndex(b)) = j.rightCols<2>();
       Eigen::VectorXd y(2);
       y << 0.01 * noise(rng), 0.03 * noise(rng);
       Eigen::MatrixXd r = r_obs;
@@ -244,10 +251,10 @@ TEST(LineEkfTest, UpdateColumnsAndDenseUpdateAgree) {
   PredictObservation(a.pose(), a.rho(3), a.theta(3), &j);
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(2, a.x().size());
   h.leftCols<3>() = j.leftCols<3>();
-  h.middleCols<2>(9) = j.rightCols<2>();
+  h.middleCols<2>(LineEkf::RhoIndex(3)) = j.rightCols<2>();
   const Eigen::Vector2d y(0.02, -0.01);
   a.Update(y, h, r);
-  const std::vector<int> cols = {10, 9, 0, 1, 2};
+  const std::vector<int> cols = {LineEkf::ThetaIndex(3), LineEkf::RhoIndex(3), 0, 1, 2};
   Eigen::MatrixXd hc(2, 5);
   for (int c = 0; c < 5; ++c) hc.col(c) = h.col(cols[static_cast<size_t>(c)]);
   b.UpdateColumns(y, cols, hc, r);
@@ -279,7 +286,7 @@ ExtractedLine Obs(double rho, double theta, double s0, double s1) {
 // Symmetric, positive semi-definite as a whole (the robot block is exactly zero
 // here: the robot never moved) and positive definite over the map lines.
 bool SymmetricPositiveDefinite(const Eigen::MatrixXd& p) {
-  const long n = p.rows() - 3;
+  const long n = p.rows() - LineEkf::kFirstLine;
   const Eigen::MatrixXd lines = p.bottomRightCorner(n, n);
   return (p - p.transpose()).cwiseAbs().maxCoeff() < 1e-12 &&
          Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(p).eigenvalues().minCoeff() > -1e-12 &&
@@ -338,7 +345,7 @@ TEST(SlamMapTest, CollinearPieceIsInsertedThenMergedWhenItOverlaps) {
   EXPECT_EQ(slam.stats().loop_closures, 1);  // merged into the first line
   EXPECT_EQ(slam.lines()[0].id, 1);           // the older id survives
   EXPECT_EQ(slam.lines()[1].id, 2);
-  EXPECT_EQ(slam.ekf().x().size(), 3 + 2 * 2);
+  EXPECT_EQ(slam.ekf().x().size(), LineEkf::kFirstLine + 2 * 2);
   EXPECT_NEAR(slam.lines()[0].length(), 2.0, 0.03);
   EXPECT_TRUE(SymmetricPositiveDefinite(slam.ekf().P()));
 }

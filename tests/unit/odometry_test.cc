@@ -16,7 +16,9 @@ TEST(OdometryTest, StraightLine) {
   EXPECT_FALSE(o.Add({0, 0, 0}));
   const auto m = o.Add({1, Counts(1.0), Counts(1.0)});
   ASSERT_TRUE(m);
-  EXPECT_NEAR(m->ds, 1.0, 1e-4);
+  EXPECT_NEAR(m->dl, 1.0, 1e-4);
+  EXPECT_NEAR(m->dr, 1.0, 1e-4);
+  EXPECT_NEAR(o.ToMotion(*m).ds, 1.0, 1e-4);
   EXPECT_NEAR(o.pose().x, 1.0, 1e-4);
   EXPECT_NEAR(o.pose().y, 0.0, 1e-12);
   EXPECT_NEAR(o.pose().theta, 0.0, 1e-12);
@@ -60,6 +62,58 @@ TEST(OdometryTest, JacobianMatchesFiniteDifferences) {
     EXPECT_NEAR((b.x - a.x) / h, j(0, k), 1e-6);
     EXPECT_NEAR((b.y - a.y) / h, j(1, k), 1e-6);
     EXPECT_NEAR((b.theta - a.theta) / h, j(2, k), 1e-6);
+  }
+}
+
+TEST(OdometryTest, CalibratedMotionScalesEachWheelAndTheTrack) {
+  // Wheel radii 1 % and 0.5 % larger than nominal, track 2 % wider: the wheels
+  // really travel 1.01 and 1.005 times what the nominal geometry says.
+  const WheelMotion w{0.10, 0.12};
+  const double b = 0.25;
+  const Motion m = Odometry::Calibrated(w, b, {1.01, 1.005, 1.02});
+  EXPECT_NEAR(m.ds, 0.5 * (0.101 + 0.1206), 1e-15);
+  EXPECT_NEAR(m.dtheta, (0.1206 - 0.101) / (1.02 * b), 1e-15);
+  const Motion nominal = Odometry::Calibrated(w, b, {});
+  EXPECT_NEAR(nominal.ds, 0.11, 1e-15);
+  EXPECT_NEAR(nominal.dtheta, 0.02 / b, 1e-15);
+}
+
+TEST(OdometryTest, CalibrationJacobianMatchesFiniteDifferences) {
+  const Pose2 p{0.3, -0.2, 0.7};
+  const double b = 0.25;
+  const OdometryCalibration c{1.012, 0.991, 1.03};
+  const double h = 1e-7;
+  for (const WheelMotion& w : {WheelMotion{0.05, 0.06}, WheelMotion{-0.04, 0.04}, WheelMotion{0.03, -0.01}}) {
+    const Eigen::Matrix<double, 2, 3> jm = Odometry::JacobianCalibration(w, b, c);
+    // The pose's Jacobian with respect to the calibration, as LineEkf::Predict
+    // composes it: d Apply / d motion * d motion / d calibration.
+    const Eigen::Matrix<double, 3, 3> jp = Odometry::JacobianMotion(p, Odometry::Calibrated(w, b, c)) * jm;
+    for (int k = 0; k < 3; ++k) {
+      OdometryCalibration d = c;
+      (k == 0 ? d.left : k == 1 ? d.right : d.base) += h;
+      const Motion m0 = Odometry::Calibrated(w, b, c), m1 = Odometry::Calibrated(w, b, d);
+      EXPECT_NEAR((m1.ds - m0.ds) / h, jm(0, k), 1e-6);
+      EXPECT_NEAR((m1.dtheta - m0.dtheta) / h, jm(1, k), 1e-6);
+      const Pose2 a = Odometry::Apply(p, m0), e = Odometry::Apply(p, m1);
+      EXPECT_NEAR((e.x - a.x) / h, jp(0, k), 1e-6);
+      EXPECT_NEAR((e.y - a.y) / h, jp(1, k), 1e-6);
+      EXPECT_NEAR(NormalizeAngle(e.theta - a.theta) / h, jp(2, k), 1e-6);
+    }
+  }
+}
+
+TEST(OdometryTest, MotionJacobianMatchesFiniteDifferences) {
+  const Pose2 p{0.3, -0.2, 0.7};
+  const Motion m{0.05, 0.02};
+  const Eigen::Matrix<double, 3, 2> g = Odometry::JacobianMotion(p, m);
+  const double h = 1e-7;
+  for (int k = 0; k < 2; ++k) {
+    Motion q = m;
+    (k == 0 ? q.ds : q.dtheta) += h;
+    const Pose2 a = Odometry::Apply(p, m), b = Odometry::Apply(p, q);
+    EXPECT_NEAR((b.x - a.x) / h, g(0, k), 1e-6);
+    EXPECT_NEAR((b.y - a.y) / h, g(1, k), 1e-6);
+    EXPECT_NEAR(NormalizeAngle(b.theta - a.theta) / h, g(2, k), 1e-6);
   }
 }
 
