@@ -36,6 +36,8 @@
 
 namespace irslam {
 
+class ApiCpuShare;
+
 // Upper bounds of the limits (config.cc should use the same ones).
 inline constexpr size_t kMaxLineBytesLimit = 1 << 20;  // 1 MiB
 // File descriptors kept free for everything but API clients (bus, GPIO, map saves, logs).
@@ -147,10 +149,6 @@ class ApiServer {
   void Accept();
   void Admit(boost::asio::local::stream_protocol::socket socket, PeerCred peer);
   void Remove(Session* s);
-  // API thread: the CPU budget of the current window (see ApiLimits::cpu_share).
-  bool CpuBudgetLeft();
-  void Spent(std::chrono::steady_clock::duration d);
-  void Defer(std::weak_ptr<Session> s);
   // API thread: hands a request (null: a notification payload) to the control loop.
   void PostToControl(std::weak_ptr<Session> session, std::shared_ptr<const rpc::Request> request,
                      PeerCred peer);
@@ -179,11 +177,7 @@ class ApiServer {
   std::unique_ptr<boost::asio::local::stream_protocol::acceptor> acceptor_;
   std::list<std::shared_ptr<Session>> sessions_;
   std::map<std::string, std::pair<std::shared_ptr<const nlohmann::json>, std::string>> texts_;
-  std::unique_ptr<boost::asio::steady_timer> resume_timer_;
-  std::vector<std::weak_ptr<Session>> deferred_;
-  std::chrono::steady_clock::time_point window_start_{};
-  std::chrono::steady_clock::duration window_spent_{};
-  bool resume_armed_ = false;
+  std::unique_ptr<ApiCpuShare> cpu_share_;
   bool accepting_ = false;
 };
 
