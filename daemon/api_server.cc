@@ -119,13 +119,15 @@ ApiServer::ApiServer(asio::io_context& control, std::string path, ApiLimits limi
       dispatcher_(dispatcher),
       loop_(std::make_shared<Loop>()),
       counters_(std::make_unique<Counters>()),
-      cpu_share_(std::make_unique<ApiCpuShare>(loop_->io, limits_, &counters_->cpu_pauses)) {}
+      cpu_share_(std::make_unique<ApiCpuShare>(loop_->io, limits_, &counters_->cpu_pauses)),
+      accept_timer_(std::make_unique<asio::steady_timer>(loop_->io)) {}
 
 ApiServer::~ApiServer() {
   Close();
   alive_.reset();
   acceptor_.reset();
   cpu_share_.reset();
+  accept_timer_.reset();
   sessions_.clear();
   loop_.reset();  // pending handlers (and the sessions they hold) go with it
 }
@@ -210,23 +212,31 @@ void ApiServer::Accept() {
     if (!accepting_) return;
     if (ec == asio::error::no_descriptors || ec.value() == ENFILE ||
         ec == asio::error::no_buffer_space || ec == asio::error::no_memory) {
-      // Out of descriptors: the pending connection stays in the backlog; trying
-      // again at once would spin a core.
-      const uint64_t n = ++counters_->accept_backoffs;
-      if (n == 1 || n % 100 == 0) {
-        std::fprintf(stderr, "<4>api: cannot accept a client (%s, %llu times): pausing %gs\n",
-                     ec.message().c_str(), static_cast<unsigned long long>(n),
-                     limits_.accept_backoff_s);
-      }
-      auto timer = std::make_shared<asio::steady_timer>(loop_->io, Seconds(limits_.accept_backoff_s));
-      timer->async_wait([this, timer](const error_code& e) {
-        if (!e) Accept();
-      });
+      BackOff(ec);
       return;
     }
     if (ec == asio::error::operation_aborted) return;
-    if (!ec) Admit(std::move(socket), ReadPeer(socket.native_handle()));
+    if (!ec) {
+      // Read before the socket is moved (argument order is unspecified).
+      PeerCred peer = ReadPeer(socket.native_handle());
+      Admit(std::move(socket), std::move(peer));
+    }
     Accept();
+  });
+}
+
+void ApiServer::BackOff(const error_code& ec) {
+  // The pending connection stays in the backlog; trying again at once would
+  // spin a core. One timer made beforehand: no timer object is created here.
+  const uint64_t n = ++counters_->accept_backoffs;
+  if (n == 1 || n % 100 == 0) {
+    std::fprintf(stderr, "<4>api: cannot accept a client (%s, %llu times): pausing %gs\n",
+                 ec.message().c_str(), static_cast<unsigned long long>(n),
+                 limits_.accept_backoff_s);
+  }
+  accept_timer_->expires_after(Seconds(limits_.accept_backoff_s));
+  accept_timer_->async_wait([this](const error_code& e) {
+    if (!e) Accept();
   });
 }
 
@@ -290,6 +300,7 @@ void ApiServer::Close() {
       auto copy = sessions_;
       for (auto& s : copy) s->Close();
       cpu_share_->Cancel();
+      accept_timer_->cancel();
       done.set_value();
     });
     done.get_future().wait();

@@ -12,6 +12,11 @@
 // control period by more than the Dispatcher's own work for one request, and
 // `status`, `map` and status notifications are built at most once per control
 // period however many clients ask (NewPeriod()).
+//
+// Files: api_server.cc (life cycle, accepting, admission), api_session.cc (one
+// client connection), api_dispatch.cc (the control loop's side, per-period
+// sharing), api_cpu_share.cc (the API thread's CPU share); private headers in
+// daemon/internal/.
 #ifndef IRSLAM_DAEMON_API_SERVER_H_
 #define IRSLAM_DAEMON_API_SERVER_H_
 
@@ -147,6 +152,8 @@ class ApiServer {
 
   void StartThread();
   void Accept();
+  // API thread: accept failed for want of descriptors (or memory): try again later.
+  void BackOff(const boost::system::error_code& ec);
   void Admit(boost::asio::local::stream_protocol::socket socket, PeerCred peer);
   void Remove(Session* s);
   // API thread: hands a request (null: a notification payload) to the control loop.
@@ -178,6 +185,7 @@ class ApiServer {
   std::list<std::shared_ptr<Session>> sessions_;
   std::map<std::string, std::pair<std::shared_ptr<const nlohmann::json>, std::string>> texts_;
   std::unique_ptr<ApiCpuShare> cpu_share_;
+  std::unique_ptr<boost::asio::steady_timer> accept_timer_;  // the back-off (made beforehand)
   bool accepting_ = false;
 };
 
