@@ -66,14 +66,15 @@ bool ReadParams(const Item& item, options::Table<P> keys,
     }
   }
   const std::vector<options::Entry> entries = options::Bind(params, keys);
-  for (const auto& [key, value] : item.values) {
+  for (const auto& kv : item.values) {
+    const std::string& key = kv.first;
     const auto e = std::find_if(entries.begin(), entries.end(),
                                 [&](const options::Entry& x) { return x.name == key; });
     if (e == entries.end()) {
       *error = where + "unknown key '" + key + "'";
       return false;
     }
-    const std::string what = options::ReadEntry(ValueJson(value), *e);
+    const std::string what = options::ReadEntry(ValueJson(kv.second), *e);
     if (!what.empty()) {
       *error = where + key + what;
       return false;
