@@ -12,6 +12,11 @@
 // control period by more than the Dispatcher's own work for one request, and
 // `status`, `map` and status notifications are built at most once per control
 // period however many clients ask (NewPeriod()).
+//
+// Files: api_server.cc (life cycle, accepting, admission), api_session.cc (one
+// client connection), api_dispatch.cc (the control loop's side, per-period
+// sharing), api_cpu_share.cc (the API thread's CPU share); private headers in
+// daemon/internal/.
 #ifndef IRSLAM_DAEMON_API_SERVER_H_
 #define IRSLAM_DAEMON_API_SERVER_H_
 
@@ -35,6 +40,8 @@
 #include "daemon/jsonrpc.h"
 
 namespace irslam {
+
+class ApiCpuShare;
 
 // Upper bounds of the limits (config.cc should use the same ones).
 inline constexpr size_t kMaxLineBytesLimit = 1 << 20;  // 1 MiB
@@ -145,12 +152,10 @@ class ApiServer {
 
   void StartThread();
   void Accept();
+  // API thread: accept failed for want of descriptors (or memory): try again later.
+  void BackOff(const boost::system::error_code& ec);
   void Admit(boost::asio::local::stream_protocol::socket socket, PeerCred peer);
   void Remove(Session* s);
-  // API thread: the CPU budget of the current window (see ApiLimits::cpu_share).
-  bool CpuBudgetLeft();
-  void Spent(std::chrono::steady_clock::duration d);
-  void Defer(std::weak_ptr<Session> s);
   // API thread: hands a request (null: a notification payload) to the control loop.
   void PostToControl(std::weak_ptr<Session> session, std::shared_ptr<const rpc::Request> request,
                      PeerCred peer);
@@ -179,11 +184,8 @@ class ApiServer {
   std::unique_ptr<boost::asio::local::stream_protocol::acceptor> acceptor_;
   std::list<std::shared_ptr<Session>> sessions_;
   std::map<std::string, std::pair<std::shared_ptr<const nlohmann::json>, std::string>> texts_;
-  std::unique_ptr<boost::asio::steady_timer> resume_timer_;
-  std::vector<std::weak_ptr<Session>> deferred_;
-  std::chrono::steady_clock::time_point window_start_{};
-  std::chrono::steady_clock::duration window_spent_{};
-  bool resume_armed_ = false;
+  std::unique_ptr<ApiCpuShare> cpu_share_;
+  std::unique_ptr<boost::asio::steady_timer> accept_timer_;  // the back-off (made beforehand)
   bool accepting_ = false;
 };
 

@@ -1,9 +1,13 @@
 #include "sim/faults.h"
 
+#include <algorithm>
 #include <cmath>
-#include <map>
+#include <cstdlib>
+#include <initializer_list>
 #include <sstream>
+#include <string_view>
 
+#include "io/option_json.h"
 #include "proto/codec.h"
 
 namespace irslam::sim {
@@ -13,117 +17,204 @@ bool FaultSpec::any() const {
          !silence.empty() || !flood.empty() || !stuck_ir.empty() || !encoder_glitch.empty();
 }
 
+namespace {
+
+constexpr double kMaxTimeS = 1e6;  // robot seconds
+
+// One item of SPEC as written: NAME and its KEY=VALUE pairs in order.
+struct Item {
+  std::string text, name;
+  std::vector<std::pair<std::string, std::string>> values;
+};
+
+bool SplitItem(const std::string& text, Item* item, std::string* error) {
+  item->text = text;
+  std::stringstream parts(text);
+  std::getline(parts, item->name, ':');
+  std::string kv;
+  while (std::getline(parts, kv, ':')) {
+    const auto eq = kv.find('=');
+    if (eq == std::string::npos) {
+      *error = "faults: '" + text + "': expected KEY=VALUE, got '" + kv + "'";
+      return false;
+    }
+    item->values.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
+  }
+  return true;
+}
+
+// A value as the option table reads it: a number when the whole text is one, else a word.
+nlohmann::json ValueJson(const std::string& text) {
+  char* end = nullptr;
+  const double d = std::strtod(text.c_str(), &end);
+  if (!text.empty() && *end == '\0' && std::isfinite(d)) return d;
+  return text;
+}
+
+// Sets *params from the item through the fault's key table: the required keys
+// given, every key in the table, every value of its key's type and within its
+// bounds (io/option_json.h). The error names the item and the key.
+template <class P>
+bool ReadParams(const Item& item, options::Table<P> keys,
+                std::initializer_list<std::string_view> required, P* params, std::string* error) {
+  const std::string where = "faults: '" + item.text + "': ";
+  for (const std::string_view key : required) {
+    if (std::none_of(item.values.begin(), item.values.end(),
+                     [&](const auto& kv) { return kv.first == key; })) {
+      *error = where + "needs " + std::string(key) + "=";
+      return false;
+    }
+  }
+  const std::vector<options::Entry> entries = options::Bind(params, keys);
+  for (const auto& kv : item.values) {
+    const std::string& key = kv.first;
+    const auto e = std::find_if(entries.begin(), entries.end(),
+                                [&](const options::Entry& x) { return x.name == key; });
+    if (e == entries.end()) {
+      *error = where + "unknown key '" + key + "'";
+      return false;
+    }
+    const std::string what = options::ReadEntry(ValueJson(kv.second), *e);
+    if (!what.empty()) {
+      *error = where + key + what;
+      return false;
+    }
+  }
+  return true;
+}
+
+double& ChanceOf(const std::string& name, FaultSpec* f) {
+  if (name == "loss") return f->loss_p;
+  if (name == "corrupt") return f->corrupt_p;
+  if (name == "duplicate") return f->duplicate_p;
+  return f->reorder_p;
+}
+
+bool AddFault(const Item& item, FaultSpec* f, std::string* error) {
+  const std::string& n = item.name;
+  if (n == "loss" || n == "corrupt" || n == "duplicate" || n == "reorder") {
+    ChanceFaultParams c;
+    if (!ReadParams(item, ChanceFaultKeys(), {"p"}, &c, error)) return false;
+    ChanceOf(n, f) = c.p;
+  } else if (n == "burst") {
+    BurstFaultParams b;
+    if (!ReadParams(item, BurstFaultKeys(), {"every", "len"}, &b, error)) return false;
+    f->burst_every_s = b.every;
+    f->burst_len_s = b.len;
+  } else if (n == "delay") {
+    DelayFaultParams d;
+    if (!ReadParams(item, DelayFaultKeys(), {"p"}, &d, error)) return false;
+    f->delay_p = d.p;
+    f->delay_max_s = d.max;
+  } else if (n == "silence") {
+    SilenceFaultParams s;
+    if (!ReadParams(item, SilenceFaultKeys(), {"at", "for"}, &s, error)) return false;
+    f->silence.push_back({s.at, s.for_s});
+    f->silence_reset.push_back(s.reset > 0);
+  } else if (n == "flood") {
+    FloodFaultParams fl;
+    fl.rate = f->flood_rate;  // a flood without rate= keeps an earlier one's
+    if (!ReadParams(item, FloodFaultKeys(), {"at", "for"}, &fl, error)) return false;
+    f->flood.push_back({fl.at, fl.for_s});
+    f->flood_rate = fl.rate;
+  } else if (n == "stuck_ir") {
+    StuckIrFaultParams st;
+    if (!ReadParams(item, StuckIrFaultKeys(), {"sensor", "at"}, &st, error)) return false;
+    f->stuck_ir.push_back({st.sensor, {st.at, st.for_s}});
+  } else if (n == "encoder_glitch") {
+    EncoderGlitchFaultParams g;
+    if (!ReadParams(item, EncoderGlitchFaultKeys(), {"at", "counts"}, &g, error)) return false;
+    const bool left = g.wheel == "left" || g.wheel == "both";
+    const bool right = g.wheel == "right" || g.wheel == "both";
+    if (!left && !right) {
+      *error = "faults: '" + item.text + "': wheel must be left, right or both";
+      return false;
+    }
+    f->encoder_glitch.push_back({g.at, g.counts, left, right});
+  } else {
+    *error = "faults: unknown fault '" + n +
+             "' (known: loss, burst, corrupt, duplicate, reorder, delay, silence, flood, stuck_ir, "
+             "encoder_glitch)";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+options::Table<ChanceFaultParams> ChanceFaultKeys() {
+  static constexpr options::Key<ChanceFaultParams> kKeys[] = {
+      {"p", &ChanceFaultParams::p, 0, 1, "", "probability per controller frame"},
+  };
+  return kKeys;
+}
+
+options::Table<BurstFaultParams> BurstFaultKeys() {
+  using B = BurstFaultParams;
+  static constexpr options::Key<B> kKeys[] = {
+      {"every", &B::every, 0, kMaxTimeS, "s", "a burst starts this often"},
+      {"len", &B::len, 0, kMaxTimeS, "s", "every frame is dropped for this long"},
+  };
+  return kKeys;
+}
+
+options::Table<DelayFaultParams> DelayFaultKeys() {
+  using D = DelayFaultParams;
+  static constexpr options::Key<D> kKeys[] = {
+      {"p", &D::p, 0, 1, "", "probability per controller frame"},
+      {"max", &D::max, 0, 10, "s", "a delayed frame is held back up to this long"},
+  };
+  return kKeys;
+}
+
+options::Table<SilenceFaultParams> SilenceFaultKeys() {
+  using S = SilenceFaultParams;
+  static constexpr options::Key<S> kKeys[] = {
+      {"at", &S::at, 0, kMaxTimeS, "s", "the controller falls silent at this robot time"},
+      {"for", &S::for_s, 0, kMaxTimeS, "s", "for this long"},
+      {"reset", &S::reset, 0, 1, "", "1: it restarted meanwhile (clock, counts, sequences from 0)"},
+  };
+  return kKeys;
+}
+
+options::Table<FloodFaultParams> FloodFaultKeys() {
+  using F = FloodFaultParams;
+  static constexpr options::Key<F> kKeys[] = {
+      {"at", &F::at, 0, kMaxTimeS, "s", "the flood starts at this robot time"},
+      {"for", &F::for_s, 0, kMaxTimeS, "s", "and lasts this long"},
+      {"rate", &F::rate, 0, 1e6, "1/s", "foreign frames per wall second"},
+  };
+  return kKeys;
+}
+
+options::Table<StuckIrFaultParams> StuckIrFaultKeys() {
+  using S = StuckIrFaultParams;
+  static constexpr options::Key<S> kKeys[] = {
+      {"sensor", &S::sensor, 0, 6, "", "the IR sensor whose raw value sticks"},
+      {"at", &S::at, 0, kMaxTimeS, "s", "it keeps the value it had at this robot time"},
+      {"for", &S::for_s, 0, 1e9, "s", "for this long"},
+  };
+  return kKeys;
+}
+
+options::Table<EncoderGlitchFaultParams> EncoderGlitchFaultKeys() {
+  using G = EncoderGlitchFaultParams;
+  static constexpr options::Key<G> kKeys[] = {
+      {"at", &G::at, 0, kMaxTimeS, "s", "the count jumps at this robot time"},
+      {"counts", &G::counts, 0, 30000, "", "by this many counts, and stays"},
+      {"wheel", &G::wheel, 0, 0, "", "left, right or both"},
+  };
+  return kKeys;
+}
+
 std::optional<FaultSpec> ParseFaultSpec(const std::string& spec, std::string* error) {
   FaultSpec f;
   std::stringstream items(spec);
-  std::string item;
-  while (std::getline(items, item, ',')) {
-    if (item.empty()) continue;
-    std::stringstream parts(item);
-    std::string name, kv;
-    std::getline(parts, name, ':');
-    std::map<std::string, double> args;
-    std::map<std::string, std::string> words;
-    while (std::getline(parts, kv, ':')) {
-      const auto eq = kv.find('=');
-      if (eq == std::string::npos) {
-        *error = "faults: '" + item + "': expected KEY=VALUE, got '" + kv + "'";
-        return std::nullopt;
-      }
-      const std::string key = kv.substr(0, eq), value = kv.substr(eq + 1);
-      char* end = nullptr;
-      const double d = std::strtod(value.c_str(), &end);
-      if (end != value.c_str() && *end == '\0' && std::isfinite(d) && d >= 0) {
-        args[key] = d;
-      } else {
-        words[key] = value;
-      }
-    }
-    // Every key of an item must be one it knows, with a number (or a known word).
-    const auto take = [&](const char* key, double def, bool required, double hi) -> std::optional<double> {
-      auto it = args.find(key);
-      if (it == args.end()) {
-        if (words.count(key)) {
-          *error = "faults: '" + item + "': " + key + " must be a number >= 0";
-          return std::nullopt;
-        }
-        if (required) {
-          *error = "faults: '" + item + "': needs " + key + "=";
-          return std::nullopt;
-        }
-        return def;
-      }
-      const double v = it->second;
-      args.erase(it);
-      if (v > hi) {
-        std::ostringstream os;
-        os << "faults: '" << item << "': " << key << " must be at most " << hi;
-        *error = os.str();
-        return std::nullopt;
-      }
-      return v;
-    };
-    std::optional<double> a, b, c;
-    if (name == "loss") {
-      if (!(a = take("p", 0, true, 1))) return std::nullopt;
-      f.loss_p = *a;
-    } else if (name == "burst") {
-      if (!(a = take("every", 0, true, 1e6)) || !(b = take("len", 0, true, 1e6))) return std::nullopt;
-      f.burst_every_s = *a;
-      f.burst_len_s = *b;
-    } else if (name == "corrupt") {
-      if (!(a = take("p", 0, true, 1))) return std::nullopt;
-      f.corrupt_p = *a;
-    } else if (name == "duplicate") {
-      if (!(a = take("p", 0, true, 1))) return std::nullopt;
-      f.duplicate_p = *a;
-    } else if (name == "reorder") {
-      if (!(a = take("p", 0, true, 1))) return std::nullopt;
-      f.reorder_p = *a;
-    } else if (name == "delay") {
-      if (!(a = take("p", 0, true, 1)) || !(b = take("max", 0.02, false, 10))) return std::nullopt;
-      f.delay_p = *a;
-      f.delay_max_s = *b;
-    } else if (name == "silence") {
-      if (!(a = take("at", 0, true, 1e6)) || !(b = take("for", 0, true, 1e6)) || !(c = take("reset", 0, false, 1))) {
-        return std::nullopt;
-      }
-      f.silence.push_back({*a, *b});
-      f.silence_reset.push_back(*c > 0);
-    } else if (name == "flood") {
-      if (!(a = take("at", 0, true, 1e6)) || !(b = take("for", 0, true, 1e6)) ||
-          !(c = take("rate", f.flood_rate, false, 1e6))) {
-        return std::nullopt;
-      }
-      f.flood.push_back({*a, *b});
-      f.flood_rate = *c;
-    } else if (name == "stuck_ir") {
-      if (!(a = take("sensor", 0, true, 6)) || !(b = take("at", 0, true, 1e6)) || !(c = take("for", 1e9, false, 1e9))) {
-        return std::nullopt;
-      }
-      f.stuck_ir.push_back({static_cast<int>(*a), {*b, *c}});
-    } else if (name == "encoder_glitch") {
-      if (!(a = take("at", 0, true, 1e6)) || !(b = take("counts", 0, true, 30000))) return std::nullopt;
-      FaultSpec::Glitch g{*a, static_cast<int>(*b), true, false};
-      if (auto w = words.find("wheel"); w != words.end()) {
-        g.left = w->second == "left" || w->second == "both";
-        g.right = w->second == "right" || w->second == "both";
-        if (!g.left && !g.right) {
-          *error = "faults: '" + item + "': wheel must be left, right or both";
-          return std::nullopt;
-        }
-        words.erase(w);
-      }
-      f.encoder_glitch.push_back(g);
-    } else {
-      *error = "faults: unknown fault '" + name +
-               "' (known: loss, burst, corrupt, duplicate, reorder, delay, silence, flood, stuck_ir, encoder_glitch)";
-      return std::nullopt;
-    }
-    if (!args.empty() || !words.empty()) {
-      *error = "faults: '" + item + "': unknown key '" + (args.empty() ? words.begin()->first : args.begin()->first) + "'";
-      return std::nullopt;
-    }
+  std::string text;
+  while (std::getline(items, text, ',')) {
+    if (text.empty()) continue;
+    Item item;
+    if (!SplitItem(text, &item, error) || !AddFault(item, &f, error)) return std::nullopt;
   }
   return f;
 }

@@ -17,7 +17,9 @@
 //   encoder_glitch:at=T:counts=N[:wheel=left|right|both]  the count jumps by N and stays
 //
 // Times are robot seconds. Probabilities apply to the controller's frames
-// (ENCODER, CTRL_STATUS, IR_A, IR_B).
+// (ENCODER, CTRL_STATUS, IR_A, IR_B). Each fault's keys are an option table
+// (types/options.h) below: names, types and bounds are checked in one place
+// (io/option_json.h), unknown keys are an error.
 #ifndef IRSLAM_SIM_FAULTS_H_
 #define IRSLAM_SIM_FAULTS_H_
 
@@ -29,7 +31,44 @@
 #include <string>
 #include <vector>
 
+#include "types/options.h"
+
 namespace irslam::sim {
+
+// The keys of each fault (defaults as documented above; the keys a fault needs
+// are listed by ParseFaultSpec).
+struct ChanceFaultParams {  // loss, corrupt, duplicate, reorder
+  double p = 0;
+};
+struct BurstFaultParams {
+  double every = 0, len = 0;
+};
+struct DelayFaultParams {
+  double p = 0, max = 0.02;
+};
+struct SilenceFaultParams {
+  double at = 0, for_s = 0;
+  int reset = 0;
+};
+struct FloodFaultParams {
+  double at = 0, for_s = 0, rate = 8000;
+};
+struct StuckIrFaultParams {
+  int sensor = 0;
+  double at = 0, for_s = 1e9;
+};
+struct EncoderGlitchFaultParams {
+  double at = 0;
+  int counts = 0;
+  std::string wheel = "left";
+};
+options::Table<ChanceFaultParams> ChanceFaultKeys();
+options::Table<BurstFaultParams> BurstFaultKeys();
+options::Table<DelayFaultParams> DelayFaultKeys();
+options::Table<SilenceFaultParams> SilenceFaultKeys();
+options::Table<FloodFaultParams> FloodFaultKeys();
+options::Table<StuckIrFaultParams> StuckIrFaultKeys();
+options::Table<EncoderGlitchFaultParams> EncoderGlitchFaultKeys();
 
 struct FaultSpec {
   double loss_p = 0;

@@ -32,8 +32,8 @@ TEST(FaultSpecTest, BadSpecsGiveOneLineNamingThePart) {
   const std::pair<const char*, const char*> cases[] = {
       {"gremlins:p=1", "faults: unknown fault 'gremlins'"},
       {"loss", "faults: 'loss': needs p="},
-      {"loss:p=2", "faults: 'loss:p=2': p must be at most 1"},
-      {"loss:p=x", "faults: 'loss:p=x': p must be a number >= 0"},
+      {"loss:p=2", "faults: 'loss:p=2': p must be in [0, 1] (got 2)"},
+      {"loss:p=x", "faults: 'loss:p=x': p must be a number"},
       {"loss:q=0.1", "faults: 'loss:q=0.1': needs p="},
       {"loss:p=0.1:q=1", "faults: 'loss:p=0.1:q=1': unknown key 'q'"},
       {"silence:at=1", "faults: 'silence:at=1': needs for="},
@@ -45,6 +45,39 @@ TEST(FaultSpecTest, BadSpecsGiveOneLineNamingThePart) {
     EXPECT_FALSE(ParseFaultSpec(spec, &error)) << spec;
     EXPECT_EQ(error.rfind(want, 0), 0u) << spec << " -> " << error;
   }
+}
+
+TEST(FaultSpecTest, EveryFaultsKeysComeFromItsTable) {
+  // Unknown keys, bounds, integers and words: the same checks and words for every fault.
+  const std::pair<const char*, const char*> cases[] = {
+      {"burst:every=1:len=1:width=3", "faults: 'burst:every=1:len=1:width=3': unknown key 'width'"},
+      {"delay:p=0.1:min=0", "faults: 'delay:p=0.1:min=0': unknown key 'min'"},
+      {"flood:at=0:for=1:id=5", "faults: 'flood:at=0:for=1:id=5': unknown key 'id'"},
+      {"delay:p=0.1:max=11", "faults: 'delay:p=0.1:max=11': max must be in [0, 10] (got 11)"},
+      {"silence:at=-1:for=1", "faults: 'silence:at=-1:for=1': at must be in [0, 1000000] (got -1)"},
+      {"silence:at=1:for=1:reset=2", "faults: 'silence:at=1:for=1:reset=2': reset must be in [0, 1] (got 2)"},
+      {"flood:at=0:for=1:rate=2e6", "faults: 'flood:at=0:for=1:rate=2e6': rate must be in [0, 1000000] (got 2000000)"},
+      {"stuck_ir:sensor=7:at=1", "faults: 'stuck_ir:sensor=7:at=1': sensor must be in [0, 6] (got 7)"},
+      {"stuck_ir:sensor=2.5:at=1", "faults: 'stuck_ir:sensor=2.5:at=1': sensor must be an integer"},
+      {"encoder_glitch:at=1:counts=40000", "faults: 'encoder_glitch:at=1:counts=40000': counts must be in [0, 30000] (got 40000)"},
+      {"encoder_glitch:at=1:counts=5:wheel=2", "faults: 'encoder_glitch:at=1:counts=5:wheel=2': wheel must be a string"},
+      {"corrupt:p=nan", "faults: 'corrupt:p=nan': p must be a number"},
+  };
+  for (const auto& [spec, want] : cases) {
+    std::string error;
+    EXPECT_FALSE(ParseFaultSpec(spec, &error)) << spec;
+    EXPECT_EQ(error, want) << spec;
+  }
+  // Defaults of keys not given, and a flood without rate= keeps an earlier one's.
+  std::string error;
+  auto f = ParseFaultSpec("delay:p=0.5,stuck_ir:sensor=6:at=1,flood:at=0:for=1:rate=100,flood:at=5:for=1",
+                          &error);
+  ASSERT_TRUE(f) << error;
+  EXPECT_DOUBLE_EQ(f->delay_max_s, 0.02);
+  EXPECT_EQ(f->stuck_ir[0].sensor, 6);
+  EXPECT_DOUBLE_EQ(f->stuck_ir[0].when.len, 1e9);
+  EXPECT_EQ(f->flood.size(), 2u);
+  EXPECT_DOUBLE_EQ(f->flood_rate, 100);
 }
 
 std::vector<can_frame> Enc(uint16_t stamp, uint16_t l, uint16_t r, uint8_t seq) {
