@@ -27,6 +27,7 @@ nlohmann::json Daemon::Start(const rpc::Request& req) {
   std::string why;
   if (!core_->Start(now, &why)) return rpc::MakeError(req.id, rpc::kRejected, "start rejected: " + why);
   maps_.OnMissionStarted();
+  if (recorder_) recorder_->Note("start", now);  // for irslam-replay (docs/replay.md)
   std::fprintf(stderr, "<6>irslamd: mission started\n");
   return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
 }
@@ -34,7 +35,8 @@ nlohmann::json Daemon::Start(const rpc::Request& req) {
 nlohmann::json Daemon::Stop(const rpc::Request& req) {
   const double now = RobotNow();
   core_->Stop(now);
-  bus_->Send(core_->StopFrame());  // at once, not at the next period
+  if (recorder_) recorder_->Note("stop", now);
+  SendFrame(core_->StopFrame(), now);  // at once, not at the next period
   ApplyOutputs(now);
   const SaveResult saved = maps_.Save("stop", [this] { return LiveMap(); });
   std::fprintf(stderr, "<6>irslamd: stopped by request (map: %s)\n", ToString(saved));
