@@ -38,7 +38,7 @@ TEST(MapPgmTest, WallsAndSidesOccupiedRoomFreeOutsideAndFurnitureUnknown) {
   EXPECT_EQ(img->height, 70);
   EXPECT_EQ(At(*img, 1.0, 1.5), kPgmFree);       // inside the room
   EXPECT_EQ(At(*img, 1.0, 0.01), kPgmOccupied);  // the bottom wall
-  EXPECT_EQ(At(*img, 3.99, 1.5), kPgmOccupied);  // the right wall
+  EXPECT_EQ(At(*img, 4.01, 1.5), kPgmOccupied);  // the right wall (x = 4 is in the cell [4, 4.05))
   EXPECT_EQ(At(*img, 2.5, 1.01), kPgmOccupied);  // the box's bottom side
   EXPECT_EQ(At(*img, 2.5, 1.5), kPgmUnknown);    // inside the box
   EXPECT_EQ(At(*img, -0.2, 1.5), kPgmUnknown);   // outside the room
@@ -52,8 +52,10 @@ TEST(MapPgmTest, WallsAndSidesOccupiedRoomFreeOutsideAndFurnitureUnknown) {
   // Walls: 2 x (80 + 60) cells plus the corners' neighbours; the box: 4 x 20.
   EXPECT_GE(occupied, 2 * (80 + 60) + 4 * 20 - 8);
   EXPECT_LE(occupied, 2 * (80 + 60) + 4 * 20 + 8);
-  // The room (80 x 60 cells) less its walls and the box (20 x 20).
-  EXPECT_NEAR(free_cells, 80 * 60 - 20 * 20 - 2 * (80 + 60) - 4 * 20, 20);
+  // The room (80 x 60 cells) less the box (20 x 20) and the lines drawn on free cells:
+  // a line on x = a is in the cell [a, a + 5 cm), so the bottom and left walls
+  // (80 + 60 - 1 at the corner) and the box's right and top sides (20 + 20 + 1).
+  EXPECT_EQ(free_cells, 80 * 60 - 20 * 20 - (80 + 60 - 1) - (20 + 20 + 1));
 }
 
 TEST(MapPgmTest, EncodesBinaryPgmAndMapServerYaml) {
@@ -61,9 +63,10 @@ TEST(MapPgmTest, EncodesBinaryPgmAndMapServerYaml) {
   const auto img = RenderPgm(TestMap(), 0.1, &error);
   ASSERT_TRUE(img) << error;
   const std::string pgm = EncodePgm(*img);
-  const std::string head = "P5\n# irslam map (map frame), 0.100000 m/cell\n45 35\n255\n";
+  // The origin on the 10 cm grid (-0.3), the far side 0.25 m beyond the room: 46 x 36.
+  const std::string head = "P5\n# irslam map (map frame), 0.100000 m/cell\n46 36\n255\n";
   ASSERT_EQ(pgm.substr(0, head.size()), head);
-  EXPECT_EQ(pgm.size(), head.size() + 45u * 35u);
+  EXPECT_EQ(pgm.size(), head.size() + 46u * 36u);
   EXPECT_EQ(MapServerYaml(*img, "map.pgm"),
             "image: map.pgm\nresolution: 0.1\norigin: [-0.300000, -0.300000, 0.0]\nnegate: 0\n"
             "occupied_thresh: 0.65\nfree_thresh: 0.196\n");
