@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -137,7 +138,14 @@ bool FindTiming(const std::vector<std::string>& logs, double period_s, double gi
   return true;
 }
 
-nlohmann::json StatsJson(const ReplayStats& s, const Timing& timing, double seconds) {
+// CPU seconds of this process (the replay's own work, whatever else the machine runs).
+double CpuSeconds() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+nlohmann::json StatsJson(const ReplayStats& s, const Timing& timing, double seconds, double cpu) {
   const double span = s.last_t - s.first_t;
   return {{"frames", s.frames},
           {"ticks", s.ticks},
@@ -153,8 +161,10 @@ nlohmann::json StatsJson(const ReplayStats& s, const Timing& timing, double seco
           {"started_t", s.started_t ? nlohmann::json(*s.started_t) : nlohmann::json()},
           {"robot_time_s", span},
           {"time_scale", timing.time_scale},
-          {"cpu_s", seconds},
-          {"speed", seconds > 0 ? span / seconds : 0.0}};
+          {"wall_s", seconds},
+          {"cpu_s", cpu},
+          {"speed", seconds > 0 ? span / seconds : 0.0},
+          {"speed_cpu", cpu > 0 ? span / cpu : 0.0}};
 }
 
 int Main(int argc, char** argv) {
@@ -193,6 +203,7 @@ int Main(int argc, char** argv) {
     return 1;
   }
   const auto begin = std::chrono::steady_clock::now();
+  const double cpu_begin = CpuSeconds();
   Replay replay(core, timing.origin_ns, timing.time_scale);
   if (timing.feed_from_ns) replay.SkipControllerFramesBefore(*timing.feed_from_ns);
   LogReader reader(logs);
@@ -228,6 +239,7 @@ int Main(int argc, char** argv) {
     return 1;
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+  const double cpu = CpuSeconds() - cpu_begin;
   const ReplayStats& s = replay.stats();
   const nlohmann::json map = ToJson(replay.core().Map());
   if (!map_out.empty() && !WriteText(map_out, map.dump(1) + "\n")) {
@@ -242,14 +254,15 @@ int Main(int argc, char** argv) {
     std::fprintf(stderr, "irslam-replay: %s\n", error.c_str());
     return 1;
   }
-  const nlohmann::json stats = StatsJson(s, timing, seconds);
+  const nlohmann::json stats = StatsJson(s, timing, seconds, cpu);
   if (!stats_out.empty() && !WriteText(stats_out, stats.dump(1) + "\n")) {
     std::fprintf(stderr, "irslam-replay: cannot write %s\n", stats_out.c_str());
     return 1;
   }
   std::fprintf(stderr,
                "irslam-replay: %llu frames, %llu ticks (time scale %g from %s); %s; commands as recorded %llu of %llu, "
-               "states %llu of %llu; %.1f s of robot time in %.3f s (%.0fx); state %s, %zu lines, %zu objects\n",
+               "states %llu of %llu; %.1f s of robot time in %.3f s (%.0fx real time; CPU %.3f s: %.0fx); state %s, %zu lines, "
+               "%zu objects\n",
                static_cast<unsigned long long>(s.frames), static_cast<unsigned long long>(s.ticks), timing.time_scale,
                timing.source,
                s.started_t ? ("started at t=" + std::to_string(*s.started_t) + " s").c_str() : "never started",
@@ -257,7 +270,8 @@ int Main(int argc, char** argv) {
                static_cast<unsigned long long>(s.commands_matched + s.commands_differed),
                static_cast<unsigned long long>(s.heartbeats - s.states_differed),
                static_cast<unsigned long long>(s.heartbeats), s.last_t - s.first_t, seconds,
-               seconds > 0 ? (s.last_t - s.first_t) / seconds : 0.0, map["state"].get<std::string>().c_str(),
+               seconds > 0 ? (s.last_t - s.first_t) / seconds : 0.0, cpu, cpu > 0 ? (s.last_t - s.first_t) / cpu : 0.0,
+               map["state"].get<std::string>().c_str(),
                map["lines"].size(), map["objects"].size());
   if (!s.start_error.empty()) std::fprintf(stderr, "irslam-replay: a start was refused: %s\n", s.start_error.c_str());
   return 0;

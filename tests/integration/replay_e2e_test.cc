@@ -145,8 +145,8 @@ TEST_F(RecordReplayTest, AMissionRecordedOnTheBusReplaysOfflineToTheLiveMap) {
   EXPECT_EQ(differed, 0u) << stats.dump();
   EXPECT_EQ(stats["states_differed"], 0);
   EXPECT_TRUE(std::filesystem::exists(dir_ + "/replay.yaml"));
-  std::printf("replay of irslamd's recording: %.1f s of robot time at %.0fx real time\n",
-              stats["robot_time_s"].get<double>(), stats["speed"].get<double>());
+  std::printf("replay of irslamd's recording: %.1f s of robot time at %.0fx real time (%.0fx on CPU time)\n",
+              stats["robot_time_s"].get<double>(), stats["speed"].get<double>(), stats["speed_cpu"].get<double>());
 
   // 2. irslam-candump's log: the bus as a bystander saw it (no header: the time
   //    scale is estimated from the WHEEL_CMD spacing, the origin is the first frame).
