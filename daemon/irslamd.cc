@@ -97,9 +97,10 @@ void Daemon::OpenRecorder() {
 }
 
 void Daemon::OnFrame(const can_frame& f) {
-  if (recorder_) recorder_->Record(f, RobotNow());
+  const double now = RobotNow();  // one time for the core and the recording
+  if (recorder_) recorder_->Record(f, now);
   if (!ForeignCommanderWatch::IsCommanderFrame(f)) {
-    core_->OnFrame(f, RobotNow());
+    core_->OnFrame(f, now);
     return;
   }
   if (foreign_.OnFrame(WallNow())) {
@@ -208,8 +209,9 @@ void Daemon::OnSignal(int signo) {
 int Daemon::Shutdown() {
   notifier_.Send("STOPPING=1");
   running_ = false;
-  core_->Stop(RobotNow());
-  SendFrame(core_->StopFrame(), RobotNow());
+  const double now = RobotNow();
+  core_->Stop(now);  // not noted for the replay: it ends in the mission's state
+  SendFrame(core_->StopFrame(), now);
   if (gpio_) gpio_->Close();  // motor driver disabled, LED off
   if (maps_.Save("shutdown", [this] { return LiveMap(); }, /*final=*/true) == SaveResult::kFailed) {
     std::fprintf(stderr, "<3>irslamd: the final map save failed: exit status 1\n");
