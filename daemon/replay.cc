@@ -43,6 +43,7 @@ void Replay::Feed(const LogLine& line) {
 }
 
 void Replay::OnEvent(const LogEvent& event) {
+  noted_ = true;
   const double t = RobotTimeFromLogNs(event.stamp_ns - origin_ns_, time_scale_);
   if (event.name == "start") {
     StartMission(t);
@@ -70,24 +71,18 @@ void Replay::OnWheelCmd(const can_frame& f, double t) {
     ++stats_.ignored;
     return;
   }
-  const double period = core_.options().period_s;
-  if (!cmd->enable &&
-      (stop_frame_next_ || (last_recorded_enable_ && last_tick_t_ && t - *last_tick_t_ < 0.9 * period))) {
-    // The stop call's immediate stop frame, between two ticks.
+  if (!cmd->enable && stop_frame_next_) {
+    // The noted stop call's immediate stop frame, between two ticks.
     stop_frame_next_ = false;
     ++stats_.stop_frames;
-    last_recorded_enable_ = false;
-    if (Driving(core_.state())) {
-      core_.Stop(t);
-      ++stats_.stops;
-    }
     return;
   }
-  if (cmd->enable && !Driving(core_.state())) StartMission(t);
+  // (Not from a fault: the core leaves one by itself when the controller is back.)
+  if (!noted_ && cmd->enable && !Driving(core_.state()) && core_.state() != control::MissionState::kFault) {
+    StartMission(t);
+  }
   const std::vector<can_frame> out = core_.Tick(t);
   ++stats_.ticks;
-  last_tick_t_ = t;
-  last_recorded_enable_ = cmd->enable;
   // Enable the same and each velocity within one step of the encoding (1 mm/s): the
   // log's stamps carry the tick times to the microsecond, which may move a velocity
   // across a rounding boundary.
@@ -110,7 +105,9 @@ void Replay::OnHeartbeat(const can_frame& f, double t) {
   }
   ++stats_.heartbeats;
   const auto recorded = static_cast<control::MissionState>(hb->state);
-  if (Driving(recorded) && !Driving(core_.state()) && core_.state() != control::MissionState::kFault) {
+  if (noted_) {
+    // Start and stop are in the log: nothing to derive.
+  } else if (Driving(recorded) && !Driving(core_.state()) && core_.state() != control::MissionState::kFault) {
     StartMission(t);
   } else if (recorded == control::MissionState::kIdle && Driving(core_.state())) {
     core_.Stop(t);

@@ -8,15 +8,15 @@
 //     time. SLAM takes its time from the controller's stamps inside the frames, so
 //     the same frames in the same order give the same lines and pose, bit for bit;
 //   - irslamd's WHEEL_CMD, sent once per control period right after Tick: each one
-//     is a Tick of the replayed core at its log time (the daemon's tick grid). A
-//     WHEEL_CMD with Enable=0 less than 0.9 period after a driving one is the `stop`
-//     call's immediate stop frame: Stop, no Tick;
+//     is a Tick of the replayed core at its log time (the daemon's tick grid);
 //   - irslamd's recorder notes the `start` and `stop` calls as comments at their
-//     exact time (OnEvent); other logs have no room for them:
-//   - the `start` call leaves no frame of its own: a WHEEL_CMD with Enable=1 (or a
-//     DAEMON_HEARTBEAT with a driving state) while the replayed mission is idle or
-//     done means start was called since the previous tick: Start, then Tick. A
-//     heartbeat saying idle while the replayed mission drives: Stop.
+//     exact time (OnEvent), and the stop call's immediate stop frame (not a tick)
+//     follows the note. Other logs have no room for API calls: a WHEEL_CMD with
+//     Enable=1 (or a DAEMON_HEARTBEAT with a driving state) while the replayed
+//     mission is idle or done means start was called since the previous tick:
+//     Start, then Tick. A heartbeat saying idle while the replayed mission drives:
+//     Stop (the stop frame itself, which cannot be told from a tick that came
+//     early after a late one, is replayed as a tick).
 // The replayed core's own WHEEL_CMD is compared with the recorded one at every tick
 // (Enable, and the velocities within 1 mm/s; not Seq), and its state with every recorded heartbeat: the
 // counts say how faithfully the mission was reproduced.
@@ -62,9 +62,12 @@ class Replay {
   // A bystander's log (no recorder header) may begin long before the daemon did:
   // controller frames stamped before ns are not fed (the daemon was not there).
   void SkipControllerFramesBefore(int64_t ns) { skip_before_ns_ = ns; }
-  // An API call irslamd's recorder noted (start, stop): replayed at its exact time,
-  // so nothing needs deriving. Others are ignored.
+  // An API call irslamd's recorder noted (start, stop): replayed at its exact time.
+  // From the first note on, start and stop are no longer derived. Others are ignored.
   void OnEvent(const LogEvent& event);
+  // The log comes from irslamd's recorder (its header): start and stop are noted,
+  // never derived.
+  void SetNoted() { noted_ = true; }
 
   const robot::RobotCore& core() const { return core_; }
   const ReplayStats& stats() const { return stats_; }
@@ -81,8 +84,7 @@ class Replay {
   ReplayStats stats_;
   bool any_ = false;
   int64_t skip_before_ns_ = INT64_MIN;
-  std::optional<double> last_tick_t_;
-  bool last_recorded_enable_ = false;
+  bool noted_ = false;            // the log notes start and stop (irslamd's recorder)
   bool stop_frame_next_ = false;  // a noted stop: its stop frame follows
 };
 

@@ -85,6 +85,7 @@ struct Timing {
   double time_scale = 1;
   const char* source = "";
   std::optional<int64_t> feed_from_ns;  // a bystander's log: from the daemon's first frame
+  bool noted = false;                   // irslamd's recording: start and stop are noted
 };
 
 // The time origin and scale: the recorder's header, else the first frame and the
@@ -109,6 +110,7 @@ bool FindTiming(const std::vector<std::string>& logs, double period_s, double gi
     timing->origin_ns = reader.header()->origin_ns;
     timing->time_scale = given_scale > 0 ? given_scale : reader.header()->time_scale;
     timing->source = given_scale > 0 ? "--time-scale" : "the recorder's header";
+    timing->noted = true;
     return true;
   }
   if (!first) {
@@ -206,6 +208,7 @@ int Main(int argc, char** argv) {
   const double cpu_begin = CpuSeconds();
   Replay replay(core, timing.origin_ns, timing.time_scale);
   if (timing.feed_from_ns) replay.SkipControllerFramesBefore(*timing.feed_from_ns);
+  if (timing.noted) replay.SetNoted();
   LogReader reader(logs);
   LogLine line;
   std::optional<int64_t> last_stamp;
