@@ -49,6 +49,18 @@ options::Table<robot::ApiSettings> ApiKeys() {
   return kKeys;
 }
 
+options::Table<robot::RecordSettings> RecordKeys() {
+  using R = robot::RecordSettings;
+  static constexpr options::Key<R> kKeys[] = {
+      {"enabled", &R::enabled, 0, 0, "", "record the bus to STATE_DIR/bus.log (candump -L; irslam-replay)"},
+      {"max_bytes", &R::max_bytes, 65536, 2147483647, "bytes", "a log file is rotated at this size"},
+      {"files", &R::files, 1, 100, "", "files kept: bus.log and bus.log.1 .. bus.log.(files-1)"},
+      {"buffer_bytes", &R::buffer_bytes, 4096, 64 * 1024 * 1024, "bytes",
+       "lines waiting for the writer at most (more are dropped and counted)"},
+  };
+  return kKeys;
+}
+
 options::Table<drivers::GpioSettings> GpioKeys() {
   static constexpr options::Key<drivers::GpioSettings> kKeys[] = {
       {"debounce_s", &drivers::GpioSettings::debounce_s, 0, 1, "s",
@@ -185,6 +197,9 @@ void WalkConfig(robot::CoreOptions* o, Visitor* v) {
   v->End();
   v->Section("state", "");
   v->Keys(o, StateKeys());
+  v->End();
+  v->Section("record", "the daemon's own bus recording (irslamd only; applies at restart)");
+  v->Keys(&o->record, RecordKeys());
   v->End();
   WalkGpio(o, v);
   v->Section("robot", "");

@@ -56,6 +56,8 @@ nlohmann::json Daemon::Start(const rpc::Request& req) {
   std::string why;
   if (!core_->Start(now, &why)) return rpc::MakeError(req.id, rpc::kRejected, "start rejected: " + why);
   maps_.OnMissionStarted();
+  // For irslam-replay (docs/replay.md): the mode goes with the start.
+  if (recorder_) recorder_->Note(core_->clean_mode() ? "start_clean" : "start", now);
   std::fprintf(stderr, "<6>irslamd: mission started (mode %s)\n", mode.c_str());
   return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
 }
@@ -63,7 +65,8 @@ nlohmann::json Daemon::Start(const rpc::Request& req) {
 nlohmann::json Daemon::Stop(const rpc::Request& req) {
   const double now = RobotNow();
   core_->Stop(now);
-  bus_->Send(core_->StopFrame());  // at once, not at the next period
+  if (recorder_) recorder_->Note("stop", now);
+  SendFrame(core_->StopFrame(), now);  // at once, not at the next period
   ApplyOutputs(now);
   const SaveResult saved = maps_.Save("stop", [this] { return LiveMap(); });
   std::fprintf(stderr, "<6>irslamd: stopped by request (map: %s)\n", ToString(saved));

@@ -49,6 +49,11 @@ nlohmann::json Daemon::StatusJson() {
   s["notify_dropped"] = notifier_.dropped();
   if (gpio_) s["gpio"] = GpioJson(*gpio_);
   s["map_store"] = maps_.StatusJson();
+  if (recorder_) {
+    const RecorderStats r = recorder_->stats();
+    s["record"] = {{"path", r.path},          {"lines", r.lines},         {"dropped", r.dropped},
+                   {"bytes", r.bytes},        {"rotations", r.rotations}, {"error", r.error}};
+  }
   return s;
 }
 

@@ -1,6 +1,6 @@
 // irslamctl: command-line client of irslamd (contracts.md §3).
 //   irslamctl [--socket PATH] status [--json] | start [--mode M] [--fresh] | clean | stop |
-//             map [--out map.json] [--svg map.svg] | wait --state STATE [--timeout S] | watch
+//             map [--out map.json] [--svg map.svg] [--pgm map.pgm] | wait --state STATE [--timeout S] | watch
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <fstream>
 
+#include "daemon/map_pgm.h"
 #include "daemon/map_svg.h"
 #include "daemon/rpc_client.h"
 
@@ -143,6 +144,12 @@ int main(int argc, char** argv) {
   auto* map = app.add_subcommand("map", "Fetch the map");
   map->add_option("--out", out_path, "Write the map JSON here (default: stdout)");
   map->add_option("--svg", svg_path, "Also draw it as SVG");
+  std::string pgm_path;
+  double pgm_res = irslam::kDefaultPgmResolutionM;
+  map->add_option("--pgm", pgm_path, "Also write an occupancy grid FILE.pgm and FILE.yaml (ROS map_server)");
+  map->add_option("--pgm-resolution", pgm_res, "Cell size of --pgm in metres")
+      ->check(CLI::Range(0.005, 1.0))
+      ->capture_default_str();
   std::string want_state;
   double timeout = 0;
   auto* wait = app.add_subcommand("wait", "Wait until the mission reaches a state");
@@ -183,7 +190,7 @@ int main(int argc, char** argv) {
   if (*map) {
     auto m = client.Call("map", nlohmann::json::object(), 30, &error);
     if (!m) return Fail(error);
-    if (out_path.empty() && svg_path.empty()) {
+    if (out_path.empty() && svg_path.empty() && pgm_path.empty()) {
       std::printf("%s\n", m->dump(1).c_str());
     }
     if (!out_path.empty() && !WriteFile(out_path, m->dump(1) + "\n")) {
@@ -192,6 +199,7 @@ int main(int argc, char** argv) {
     if (!svg_path.empty() && !WriteFile(svg_path, RenderMapSvg(*m, nullptr, nullptr))) {
       return Fail("cannot write " + svg_path);
     }
+    if (!pgm_path.empty() && !irslam::WritePgmMap(*m, pgm_path, pgm_res, &error)) return Fail(error);
     return 0;
   }
   if (*wait || *watch) {

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <ctime>
 #include <thread>
 
 #include "daemon/config.h"
@@ -81,15 +82,41 @@ bool Daemon::OpenAccess(std::string* error) {
   return true;
 }
 
+void Daemon::SendFrame(const can_frame& f, double now) {
+  if (!bus_) return;
+  bus_->Send(f);
+  if (recorder_) recorder_->Record(f, now);
+}
+
+void Daemon::OpenRecorder() {
+  if (!core_options_.record.enabled || !bus_) return;
+  timespec ts{};
+  ::clock_gettime(CLOCK_REALTIME, &ts);
+  // The origin on a whole microsecond: every stamp is then origin + whole microseconds.
+  const RecordHeader header{static_cast<int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec / 1000 * 1000,
+                            options_.time_scale, core_options_.period_s};
+  const std::string iface = options_.can_iface.rfind("unix:", 0) == 0 ? "loopback" : options_.can_iface;
+  recorder_ = std::make_unique<BusRecorder>(core_options_.state_dir, core_options_.record, header, iface);
+  std::string error;
+  if (!recorder_->Open(&error)) {
+    std::fprintf(stderr, "<3>irslamd: record: %s: not recording\n", error.c_str());
+    recorder_.reset();
+    return;
+  }
+  std::fprintf(stderr, "<6>irslamd: recording the bus to %s\n", recorder_->stats().path.c_str());
+}
+
 void Daemon::OnFrame(const can_frame& f) {
+  const double now = RobotNow();  // one time for the core and the recording
+  if (recorder_) recorder_->Record(f, now);
   if (!ForeignCommanderWatch::IsCommanderFrame(f)) {
-    core_->OnFrame(f, RobotNow());
+    core_->OnFrame(f, now);
     return;
   }
   if (foreign_.OnFrame(WallNow())) {
     // Never fight over the wheels: stop and fault until it is gone and start is called.
     core_->LatchFault(RobotNow(), kForeignCommanderReason);
-    if (bus_) bus_->Send(core_->StopFrame());
+    SendFrame(core_->StopFrame(), RobotNow());
     ApplyOutputs(RobotNow());
     std::fprintf(stderr, "<2>irslamd: %s (CAN id 0x%03x): wheels stopped, mission in fault\n",
                  kForeignCommanderReason, f.can_id & CAN_SFF_MASK);
@@ -107,7 +134,7 @@ void Daemon::OnGpioInput(drivers::Gpio::Input input, bool active) {
                        active, now);
   if (core_->estop_latched() && !was_latched) {
     // At once, not at the next period: wheels zero and the driver disabled.
-    if (bus_) bus_->Send(core_->StopFrame());
+    SendFrame(core_->StopFrame(), now);
     ApplyOutputs(now);
     std::fprintf(stderr, "<2>irslamd: emergency stop pressed: wheels stopped, motor driver disabled\n");
   }
@@ -124,6 +151,7 @@ int Daemon::Run() {
   WaitSignal();
   start_ = clock_();
   scheduler_ = PeriodScheduler(scheduler_.period_ns(), Ns(start_));
+  OpenRecorder();
   ArmTimer();
   std::fprintf(stderr, "<6>irslamd: ready can=%s socket=%s period=%.3fs time_scale=%g\n", bus_->name().c_str(),
                options_.socket_path.c_str(), core_options_.period_s, options_.time_scale);
@@ -150,7 +178,7 @@ void Daemon::Tick() {
     std::fprintf(stderr, "<3>irslamd: --test-hang-at: the control loop hangs now (a test of the watchdog)\n");
     for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
   }
-  for (const can_frame& f : core_->Tick(now)) bus_->Send(f);
+  for (const can_frame& f : core_->Tick(now)) SendFrame(f, now);
   ApplyOutputs(now);
   OnStateChange(now);
   maps_.Poll([this] { return LiveMap(); });
@@ -191,8 +219,9 @@ void Daemon::OnSignal(int signo) {
 int Daemon::Shutdown() {
   notifier_.Send("STOPPING=1");
   running_ = false;
-  core_->Stop(RobotNow());
-  if (bus_) bus_->Send(core_->StopFrame());
+  const double now = RobotNow();
+  core_->Stop(now);  // not noted for the replay: it ends in the mission's state
+  SendFrame(core_->StopFrame(), now);
   if (gpio_) gpio_->Close();  // motor driver disabled, LED off
   if (maps_.Save("shutdown", [this] { return LiveMap(); }, /*final=*/true) == SaveResult::kFailed) {
     std::fprintf(stderr, "<3>irslamd: the final map save failed: exit status 1\n");

@@ -19,6 +19,7 @@
 #include "robot/robot_core.h"
 #include "daemon/access.h"
 #include "daemon/api_server.h"
+#include "daemon/bus_recorder.h"
 #include "daemon/core_json.h"
 #include "daemon/foreign_commander.h"
 #include "daemon/map_service.h"
@@ -78,7 +79,12 @@ class Daemon : public ApiServer::Dispatcher {
 
  private:
   double WallNow() const { return SecondsBetween(start_, clock_()); }
-  double RobotNow() const { return WallNow() * options_.time_scale; }
+  // Whole microseconds of wall time: the bus recorder writes them exactly
+  // (daemon/candump_log.h), so irslam-replay gives its core the same times.
+  double RobotNow() const {
+    const auto us = std::chrono::duration_cast<std::chrono::microseconds>(clock_() - start_).count();
+    return RobotTimeFromLogNs(static_cast<int64_t>(us) * 1000, options_.time_scale);
+  }
   static int64_t Ns(WallTime t);
   nlohmann::json LiveMap() const { return ToJson(core_->Map()); }
   RpcMethodTable MakeMethods();  // daemon_rpc.cc
@@ -88,6 +94,9 @@ class Daemon : public ApiServer::Dispatcher {
   void OnSignal(int signo);
   void WaitSignal();
   void OnFrame(const can_frame& f);
+  // Sends a frame (and records it when [record] is on).
+  void SendFrame(const can_frame& f, double now);
+  void OpenRecorder();
   void OnStateChange(double now);
   // A new core with these options; the map service keeps the old core's map.
   void ApplyOptions(robot::CoreOptions fresh);
@@ -121,6 +130,7 @@ class Daemon : public ApiServer::Dispatcher {
   MapService maps_;
   ForeignCommanderWatch foreign_;
   RpcMethodTable methods_;
+  std::unique_ptr<BusRecorder> recorder_;  // [record] enabled
 };
 
 }  // namespace irslam

@@ -45,6 +45,14 @@ struct ApiSettings {
   int max_pending_bytes = 1 << 20;
 };
 
+// The bus recording (config section [record]; irslamd only, docs/replay.md).
+struct RecordSettings {
+  bool enabled = false;
+  int max_bytes = 64 << 20;     // a file is rotated at this size
+  int files = 4;                // bus.log and bus.log.1 .. bus.log.(files-1)
+  int buffer_bytes = 1 << 20;   // lines waiting for the writer thread at most (more: dropped)
+};
+
 // Every parameter of the robot software (config file sections in brackets).
 struct CoreOptions {
   slam::SlamOptions slam;                 // [robot], [sensors].mounts, [slam]
@@ -58,6 +66,7 @@ struct CoreOptions {
   double heartbeat_period_s = 0.1;        // [controller].heartbeat_period_s
   ApiSettings api;                        // [api]
   GpioSettings gpio;                      // [gpio]
+  RecordSettings record;                  // [record]
   std::string state_dir = "/var/lib/irslam";  // [state].dir: the saved map (irslamd only)
 };
 
@@ -75,6 +84,7 @@ class RobotCore {
   bool Start(double now_s, std::string* why);
   // The mode of the next start: clean (explore, clean, go home) or explore only.
   void SetCleanMode(bool clean) { mission_.SetCleanMode(clean); }
+  bool clean_mode() const { return mission_.clean_mode(); }
   void Stop(double now_s);
   // Frames that stop the wheels at once (used on stop and shutdown).
   can_frame StopFrame();

@@ -14,6 +14,7 @@
 #include "robot/robot_core.h"
 #include "daemon/config.h"
 #include "daemon/core_json.h"
+#include "daemon/map_pgm.h"
 #include "daemon/map_svg.h"
 #include "drivers/can_bus.h"
 #include "proto/codec.h"
@@ -53,7 +54,9 @@ struct Common {
   std::optional<uint64_t> seed;
   std::string truth_out;
   std::string faults;  // --faults SPEC (sim/faults.h, docs/reliability.md)
-  std::string mode;    // run --mode explore|clean ("": the config's mission.mode)
+  std::string mode;     // run --mode explore|clean ("": the config's mission.mode)
+  std::string pgm_out;  // run --pgm FILE.pgm (daemon/map_pgm.h)
+  double pgm_res = kDefaultPgmResolutionM;
 };
 
 bool Load(const Common& c, World* world, robot::CoreOptions* core, uint64_t* seed) {
@@ -175,6 +178,10 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
       std::fprintf(stderr, "irslam-sim: cannot write %s\n", svg_out.c_str());
       return 1;
     }
+  }
+  if (std::string error; !c.pgm_out.empty() && !WritePgmMap(ToJson(core.Map()), c.pgm_out, c.pgm_res, &error)) {
+    std::fprintf(stderr, "irslam-sim: %s\n", error.c_str());
+    return 1;
   }
   const auto status = ToJson(core.Status(t));
   std::fprintf(stderr,
@@ -321,6 +328,10 @@ int main(int argc, char** argv) {
   run->add_option("--map-out", map_out, "Write the map here (contracts §4)");
   std::string svg_out, lines_out, events_out;
   run->add_option("--svg", svg_out, "Draw the map, the true room and trajectories as SVG");
+  run->add_option("--pgm", common.pgm_out, "Write the map as an occupancy grid FILE.pgm and FILE.yaml (ROS map_server)");
+  run->add_option("--pgm-resolution", common.pgm_res, "Cell size of --pgm in metres")
+      ->check(CLI::Range(0.005, 1.0))
+      ->capture_default_str();
   run->add_option("--lines-out", lines_out,
                   "Record every extracted line observation (JSON lines; input of irslam-weights)");
   run->add_option("--events-out", events_out,

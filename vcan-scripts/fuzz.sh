@@ -12,7 +12,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 seconds=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(jsonrpc api_session can world config map)
+[ ${#targets[@]} -gt 0 ] || targets=(jsonrpc api_session can world config map replay)
 
 bash "$IRSLAM_ROOT/vcan-scripts/install-deps.sh" --fuzz
 build=$IRSLAM_ROOT/build-fuzz

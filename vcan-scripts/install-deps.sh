@@ -10,7 +10,7 @@ set -euo pipefail
 pkgs=(cmake make g++ pkg-config
       libboost-dev libeigen3-dev libgpiod-dev libsystemd-dev nlohmann-json3-dev
       libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev can-utils
-      iproute2 systemd)
+      iproute2 systemd python3 python3-pil python3-numpy)
 for arg in "$@"; do
   case "$arg" in
     --vm)   pkgs+=(qemu-system-x86 busybox-static cpio kmod gpiod) ;;

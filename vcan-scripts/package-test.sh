@@ -10,11 +10,12 @@ deb=$(ls "$IRSLAM_ROOT"/build-deb/irslam_*.deb | head -1)
 fail() { echo "package-test: $*" >&2; exit 1; }
 export DEBIAN_FRONTEND=noninteractive
 apt-get install -y -qq "$deb" >/dev/null || fail "apt install failed"
-for f in /usr/bin/irslamd /usr/bin/irslamctl /usr/bin/irslam-candump /usr/bin/irslam-sim \
+for f in /usr/bin/irslamd /usr/bin/irslamctl /usr/bin/irslam-candump /usr/bin/irslam-sim /usr/bin/irslam-replay \
          /usr/lib/systemd/system/irslamd.service /usr/lib/sysusers.d/irslam.conf \
          /etc/irslam/irslamd.conf /usr/share/irslam/irslam.dbc \
          /usr/share/man/man8/irslamd.8.gz /usr/share/man/man1/irslamctl.1.gz \
          /usr/share/man/man1/irslam-sim.1.gz /usr/share/man/man1/irslam-candump.1.gz \
+         /usr/share/man/man1/irslam-replay.1.gz /usr/share/bash-completion/completions/irslam-replay \
          /usr/share/bash-completion/completions/irslamctl /usr/share/doc/irslam/copyright; do
   dpkg -L irslam | grep -qx "$f" || fail "$f is not in the package"
   [ -e "$f" ] || fail "$f was not installed"

@@ -1,0 +1,145 @@
+#include "daemon/replay.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "proto/codec.h"
+
+namespace irslam {
+
+Replay::Replay(robot::CoreOptions core, int64_t origin_ns, double time_scale)
+    : core_(std::move(core)), origin_ns_(origin_ns), time_scale_(time_scale) {}
+
+bool Replay::Driving(control::MissionState s) {
+  return s != control::MissionState::kIdle && s != control::MissionState::kDone &&
+         s != control::MissionState::kFault;
+}
+
+void Replay::Feed(const LogLine& line) {
+  if (line.kind != LogLine::Kind::kFrame) {
+    if (line.kind == LogLine::Kind::kForeign) ++stats_.ignored;
+    return;
+  }
+  const double t = RobotTimeFromLogNs(line.stamp_ns - origin_ns_, time_scale_);
+  if (!any_) stats_.first_t = t;
+  any_ = true;
+  stats_.last_t = t;
+  switch (line.frame.can_id) {
+    case proto::kControllerStatusId:
+    case proto::kEncoderId:
+    case proto::kIrAId:
+    case proto::kIrBId:
+      if (line.stamp_ns < skip_before_ns_) {
+        ++stats_.skipped;
+        break;
+      }
+      ++stats_.frames;
+      core_.OnFrame(line.frame, t);
+      break;
+    case proto::kWheelCmdId: OnWheelCmd(line.frame, t); break;
+    case proto::kDaemonHeartbeatId: OnHeartbeat(line.frame, t); break;
+    default: ++stats_.ignored; break;
+  }
+}
+
+void Replay::OnEvent(const LogEvent& event) {
+  noted_ = true;
+  const double t = RobotTimeFromLogNs(event.stamp_ns - origin_ns_, time_scale_);
+  if (event.name == "start" || event.name == "start_clean") {
+    // As irslamd's start: the mode applies unless a mission is running.
+    const control::MissionState st = core_.state();
+    if (st == control::MissionState::kIdle || st == control::MissionState::kDone ||
+        st == control::MissionState::kFault) {
+      core_.SetCleanMode(event.name == "start_clean");
+    }
+    StartMission(t);
+  } else if (event.name == "stop") {
+    core_.Stop(t);
+    ++stats_.stops;
+    stop_frame_next_ = true;
+  }
+}
+
+void Replay::StartMission(double t) {
+  std::string why;
+  if (core_.Start(t, &why)) {
+    ++stats_.starts;
+    if (!stats_.started_t) stats_.started_t = t;
+  } else if (stats_.start_error.empty()) {
+    stats_.start_error = why;
+  }
+}
+
+void Replay::OnWheelCmd(const can_frame& f, double t) {
+  const proto::DecodeResult r = proto::Decode(f);
+  const auto* cmd = r.ok() ? std::get_if<proto::WheelCmd>(&r.message) : nullptr;
+  if (!cmd) {
+    ++stats_.ignored;
+    return;
+  }
+  if (!cmd->enable && stop_frame_next_) {
+    // The noted stop call's immediate stop frame, between two ticks.
+    stop_frame_next_ = false;
+    ++stats_.stop_frames;
+    return;
+  }
+  // (Not from a fault: the core leaves one by itself when the controller is back.)
+  if (!noted_ && cmd->enable && !Driving(core_.state()) && core_.state() != control::MissionState::kFault) {
+    StartMission(t);
+  }
+  const std::vector<can_frame> out = core_.Tick(t);
+  ++stats_.ticks;
+  // Enable the same and each velocity within one step of the encoding (1 mm/s): the
+  // log's stamps carry the tick times to the microsecond, which may move a velocity
+  // across a rounding boundary.
+  const proto::DecodeResult mine = out.empty() ? proto::DecodeResult{} : proto::Decode(out[0]);
+  const auto* own = mine.ok() ? std::get_if<proto::WheelCmd>(&mine.message) : nullptr;
+  if (own && own->enable == cmd->enable && std::abs(own->left_mps - cmd->left_mps) < 0.0015 &&
+      std::abs(own->right_mps - cmd->right_mps) < 0.0015) {
+    ++stats_.commands_matched;
+  } else {
+    ++stats_.commands_differed;
+  }
+}
+
+void Replay::OnHeartbeat(const can_frame& f, double t) {
+  const proto::DecodeResult r = proto::Decode(f);
+  const auto* hb = r.ok() ? std::get_if<proto::DaemonHeartbeat>(&r.message) : nullptr;
+  if (!hb) {
+    ++stats_.ignored;
+    return;
+  }
+  ++stats_.heartbeats;
+  const auto recorded = static_cast<control::MissionState>(hb->state);
+  if (noted_) {
+    // Start and stop are in the log: nothing to derive.
+  } else if (Driving(recorded) && !Driving(core_.state()) && core_.state() != control::MissionState::kFault) {
+    StartMission(t);
+  } else if (recorded == control::MissionState::kIdle && Driving(core_.state())) {
+    core_.Stop(t);
+    ++stats_.stops;
+  }
+  if (recorded != core_.state()) ++stats_.states_differed;
+}
+
+std::optional<double> EstimateTimeScale(const std::vector<int64_t>& stamps_ns, double period_s) {
+  // The spacing over windows of 10 periods (wake-up jitter averages out), then the
+  // median window (a skipped period or a pause does not move it).
+  constexpr size_t kWindow = 10;
+  if (stamps_ns.size() < kWindow + 1) return std::nullopt;
+  std::vector<int64_t> d;
+  for (size_t i = kWindow; i < stamps_ns.size(); ++i) {
+    if (stamps_ns[i] > stamps_ns[i - kWindow]) d.push_back(stamps_ns[i] - stamps_ns[i - kWindow]);
+  }
+  if (d.empty()) return std::nullopt;
+  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
+  const double k = period_s * kWindow / (static_cast<double>(d[d.size() / 2]) * 1e-9);
+  // One significant digit (1, 2, 5, 10, ...) when within 3 %, else two.
+  const double mag1 = std::pow(10.0, std::floor(std::log10(k)));
+  const double one = std::round(k / mag1) * mag1;
+  if (std::abs(one - k) <= 0.03 * k) return one;
+  const double mag2 = mag1 / 10;
+  return std::round(k / mag2) * mag2;
+}
+
+}  // namespace irslam

@@ -1,0 +1,99 @@
+// Replay: a recorded bus (candump -L: irslamd's [record], irslam-candump, can-utils'
+// candump) fed through the same robot::RobotCore offline, as fast as the CPU allows,
+// to reproduce the map the daemon made (irslam-replay, contracts §7). Pure: lines in,
+// map and counts out.
+//
+// What the log carries and how each part is used (docs/replay.md):
+//   - the controller's frames (CTRL_STATUS, ENCODER, IR_A/B): OnFrame at their log
+//     time. SLAM takes its time from the controller's stamps inside the frames, so
+//     the same frames in the same order give the same lines and pose, bit for bit;
+//   - irslamd's WHEEL_CMD, sent once per control period right after Tick: each one
+//     is a Tick of the replayed core at its log time (the daemon's tick grid);
+//   - irslamd's recorder notes the `start` and `stop` calls as comments at their
+//     exact time (OnEvent), and the stop call's immediate stop frame (not a tick)
+//     follows the note. Other logs have no room for API calls: a WHEEL_CMD with
+//     Enable=1 (or a DAEMON_HEARTBEAT with a driving state) while the replayed
+//     mission is idle or done means start was called since the previous tick:
+//     Start, then Tick. A heartbeat saying idle while the replayed mission drives:
+//     Stop (the stop frame itself, which cannot be told from a tick that came
+//     early after a late one, is replayed as a tick).
+// The replayed core's own WHEEL_CMD is compared with the recorded one at every tick
+// (Enable, and the velocities within 1 mm/s; not Seq), and its state with every recorded heartbeat: the
+// counts say how faithfully the mission was reproduced.
+#ifndef IRSLAM_DAEMON_REPLAY_H_
+#define IRSLAM_DAEMON_REPLAY_H_
+
+#include <climits>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "daemon/candump_log.h"
+#include "robot/robot_core.h"
+
+namespace irslam {
+
+struct ReplayStats {
+  uint64_t frames = 0;             // controller frames fed to the core
+  uint64_t ticks = 0;              // control periods replayed (recorded WHEEL_CMDs)
+  uint64_t stop_frames = 0;        // recorded stop frames (not ticks)
+  uint64_t starts = 0;             // start calls derived from the daemon's frames
+  uint64_t stops = 0;              // stop calls derived from the daemon's frames
+  uint64_t commands_matched = 0;   // replayed WHEEL_CMD as recorded (Enable, velocities ±1 mm/s)
+  uint64_t commands_differed = 0;
+  uint64_t heartbeats = 0;
+  uint64_t states_differed = 0;    // recorded heartbeat state != replayed state
+  uint64_t ignored = 0;            // frames of other ids, extended/FD frames
+  uint64_t skipped = 0;            // controller frames before the daemon was there
+  double first_t = 0, last_t = 0;  // robot time span of the log
+  std::optional<double> started_t;  // robot time of the first start
+  std::string start_error;          // a derived start the core refused (why)
+};
+
+class Replay {
+ public:
+  // time_scale: robot seconds per second of log time; origin_ns: the log time of
+  // robot time 0 (irslamd's header, else the first frame's stamp).
+  Replay(robot::CoreOptions core, int64_t origin_ns, double time_scale);
+
+  // One frame line of the log (LogLine::Kind::kFrame / kForeign); others are ignored.
+  void Feed(const LogLine& line);
+  // A bystander's log (no recorder header) may begin long before the daemon did:
+  // controller frames stamped before ns are not fed (the daemon was not there).
+  void SkipControllerFramesBefore(int64_t ns) { skip_before_ns_ = ns; }
+  // An API call irslamd's recorder noted (start, stop): replayed at its exact time.
+  // From the first note on, start and stop are no longer derived. Others are ignored.
+  void OnEvent(const LogEvent& event);
+  // The log comes from irslamd's recorder (its header): start and stop are noted,
+  // never derived.
+  void SetNoted() { noted_ = true; }
+
+  const robot::RobotCore& core() const { return core_; }
+  const ReplayStats& stats() const { return stats_; }
+
+ private:
+  static bool Driving(control::MissionState s);
+  void OnWheelCmd(const can_frame& f, double t);
+  void OnHeartbeat(const can_frame& f, double t);
+  void StartMission(double t);
+
+  robot::RobotCore core_;
+  int64_t origin_ns_;
+  double time_scale_;
+  ReplayStats stats_;
+  bool any_ = false;
+  int64_t skip_before_ns_ = INT64_MIN;
+  bool noted_ = false;            // the log notes start and stop (irslamd's recorder)
+  bool stop_frame_next_ = false;  // a noted stop: its stop frame follows
+};
+
+// The time scale of a log without irslamd's header, from its WHEEL_CMD stamps (one
+// per control period of period_s robot seconds): period_s over the median spacing
+// (over windows of 10), rounded to one significant digit when that is within 3 %,
+// else to two. nullopt with fewer than 11 commands.
+std::optional<double> EstimateTimeScale(const std::vector<int64_t>& wheel_cmd_stamps_ns, double period_s);
+
+}  // namespace irslam
+
+#endif  // IRSLAM_DAEMON_REPLAY_H_
