@@ -105,6 +105,10 @@ RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::Core
   s.done = run.core->state() == control::MissionState::kDone;
   s.end_state = control::ToString(run.core->state());
   s.robot_time_s = run.t;
+  s.tick_p99_ms = static_cast<double>(run.profile.work().Quantile(0.99)) * 1e-6;
+  s.tick_max_ms = static_cast<double>(run.profile.work().max()) * 1e-6;
+  s.tick_phase = robot::ToString(run.profile.worst_phase());
+  s.x_realtime = run.wall_s > 0 ? run.t / run.wall_s : 0;
   const nlohmann::json truth = run.sim->Truth();
   const auto est = metrics::ToWorld(run.core->slam().trajectory(), world.start);
   const auto errors = metrics::ComparePoses(est, FromJson(truth["trajectory"]));
@@ -264,6 +268,26 @@ std::string RobustnessReport(const std::vector<std::vector<RunScore>>& by_profil
   std::ofstream(out_dir + "/robustness_robot_time.svg")
       << report::LineChart("Robot time of the mission (runs per 50 s bin)", "s", "runs", time);
   md << "\n![final position error](robustness_final_error.svg)\n\n![robot time](robustness_robot_time.svg)\n\n";
+  // The control loop's work per period (issue 15): the ten runs with the largest period.
+  md << "## Control-loop work per period\n\n"
+        "Each control period's work (the frames since the last period, then the tick), on this host's clock "
+        "while the campaign ran (`--jobs` runs at once): so the numbers move with the load. Per profile the "
+        "largest period over all runs and the runs with the largest ones; *phase*: what took most of that "
+        "period.\n\n"
+        "| profile | seed | world | robot time s | tick p99 ms | tick max ms | phase | x real time |\n"
+        "|---|---|---|---|---|---|---|---|\n";
+  for (const auto& runs : by_profile) {
+    std::vector<const RunScore*> order;
+    for (const auto& s : runs) order.push_back(&s);
+    std::sort(order.begin(), order.end(), [](const RunScore* a, const RunScore* b) { return a->tick_max_ms > b->tick_max_ms; });
+    for (size_t i = 0; i < order.size() && i < 10; ++i) {
+      const RunScore& s = *order[i];
+      md << "| " << sim::ToString(s.profile) << " | " << s.seed << " | " << s.world << " | " << F(s.robot_time_s)
+         << " | " << F(s.tick_p99_ms, 3) << " | " << F(s.tick_max_ms, 3) << " | " << s.tick_phase << " | "
+         << F(s.x_realtime, 0) << " |\n";
+    }
+  }
+  md << "\n";
   md << "## Every failing run, and how to reproduce it\n\n"
      << "| profile | seed | world | end | robot time s | pieces good/complete/all | final cm | max cm | contacts "
         "(furniture/clutter) | failures | reproduce |\n|---|---|---|---|---|---|---|---|---|---|---|\n";

@@ -30,6 +30,10 @@ struct RunScore {
   double odom_final_position_m = 0;
   int contacts_furniture = 0;    // contacts with walls or furniture
   int contacts_clutter = 0;      // contacts with legs and posts (<= 6 cm)
+  // The control loop's work per period (issue 15), this host's clock (ms).
+  double tick_p99_ms = 0, tick_max_ms = 0;
+  std::string tick_phase;        // what took the largest period
+  double x_realtime = 0;         // robot time / wall time of the run
   std::vector<std::string> failures;  // the failure classes of this run (empty: a good run)
 };
 
