@@ -19,7 +19,8 @@ TEST(DurationHistogramTest, BucketsAreEighthsOfAnOctave) {
   EXPECT_EQ(b, 1 + (19 - 6) * 8 + 7);
   EXPECT_EQ(DurationHistogram::UpperEdge(b), 1 << 20);
   EXPECT_EQ(DurationHistogram::Bucket(int64_t{1} << 40), DurationHistogram::kBuckets - 1);
-  for (int64_t ns : {100, 999, 12345, 1'000'000, 20'000'000, 3'000'000'000}) {
+  for (int64_t ns : {int64_t{100}, int64_t{999}, int64_t{12345}, int64_t{1'000'000}, int64_t{20'000'000},
+                     int64_t{3'000'000'000}}) {
     const int64_t edge = DurationHistogram::UpperEdge(DurationHistogram::Bucket(ns));
     EXPECT_GT(edge, ns);
     EXPECT_LE(static_cast<double>(edge), ns * 1.125 + 1) << ns;
