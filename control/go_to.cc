@@ -19,8 +19,11 @@ options::Table<GoToOptions> GoToKeys() {
       {"k_heading", &O::k_heading, 0.1, 20, "rad/s/rad", "turn rate per radian of heading error"},
       {"replan_period_s", &O::replan_period_s, 0.1, 60, "s",
        "the path is planned again this often"},
-      {"replan_backoff_s", &O::replan_backoff_s, 0.01, 60, "s",
-       "blocked ahead and no path found: plan again after this, doubling each time up to replan_period_s"},
+      {"replan_backoff_s", &O::replan_backoff_s, 0, 60, "s",
+       "blocked ahead and no path found: plan again after this, doubling each time up to replan_period_s "
+       "(0: every period)"},
+      {"replan_backoff_after", &O::replan_backoff_after, 1, 1000, "",
+       "... once this many plans in a row failed (before, every period)"},
       {"front_stop_m", &O::front_stop_m, 0.1, 2, "m",
        "something this close ahead: stop and plan around it"},
       {"go_to_timeout_s", &O::go_to_timeout_s, 1, 3600, "s",
@@ -268,8 +271,11 @@ GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_s
       plan_failures_ = 0;
       retry_at_ = -1e9;
     } else {
-      retry_at_ = t + std::min(o.replan_period_s, o.replan_backoff_s * std::ldexp(1.0, std::min(plan_failures_, 20)));
       ++plan_failures_;
+      const int over = plan_failures_ - std::max(1, o.replan_backoff_after);
+      retry_at_ = o.replan_backoff_s <= 0 || over < 0
+                      ? -1e9
+                      : t + std::min(o.replan_period_s, o.replan_backoff_s * std::ldexp(1.0, std::min(over, 20)));
     }
     if (!last_plan_ok_ && blocked) return Drive({0, o.k_heading * o.look_around_factor});  // blocked: look around
   } else if (blocked && !last_plan_ok_) {

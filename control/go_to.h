@@ -32,7 +32,10 @@ struct GoToOptions {
   double lookahead_m = 0.25;
   double k_heading = 2.5;  // rad/s per radian of heading error
   double replan_period_s = 2.0;
-  double replan_backoff_s = 0.1;  // blocked ahead and no path: retry after this, doubling up to replan_period_s
+  // Blocked ahead and no path, replan_backoff_after times in a row: retry after
+  // replan_backoff_s, doubling up to replan_period_s (before that, every period).
+  double replan_backoff_s = 0.1;
+  int replan_backoff_after = 10;
   double front_stop_m = 0.32;   // unmapped obstacle ahead: stop, replan
   double go_to_timeout_s = 90;  // give the goal up if not reached by then
   double go_to_stuck_s = 25;    // ... or if the robot got no go_to_progress_m further for this long
@@ -129,9 +132,9 @@ class GoTo {
   std::vector<Eigen::Vector2d> path_;
   double since_ = 0;
   double last_plan_ = -1e9;
-  // Blocked ahead and the last plan failed: not replanned before retry_at_
-  // (the delay doubles with each failure, up to replan_period_s); meanwhile the
-  // robot looks around on the spot.
+  // Blocked ahead and the last replan_backoff_after plans failed: not replanned
+  // before retry_at_ (the delay doubles with each failure, up to
+  // replan_period_s); meanwhile the robot looks around on the spot.
   bool last_plan_ok_ = true;
   int plan_failures_ = 0;
   double retry_at_ = -1e9;

@@ -61,7 +61,7 @@ std::map<std::string, Seen> AllKeys() {
 
 TEST(ControlOptionsTest, TablesAreConsistent) {
   const auto keys = AllKeys();
-  EXPECT_EQ(keys.size(), 13u + 7 + 5 + 6 + 34 + 2 + 6 + 13 + 5);
+  EXPECT_EQ(keys.size(), 13u + 7 + 5 + 6 + 35 + 2 + 6 + 13 + 5);
 }
 
 // The keys config.cc read before the tables, with their bounds.

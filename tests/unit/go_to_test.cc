@@ -115,6 +115,7 @@ TEST(GoToTest, AFailedPlanWhileBlockedBacksOffAndLooksAround) {
   Rig r;
   GoToOptions o;
   o.replan_backoff_s = 0.107;  // (off the 20 ms grid, so no retry falls on a tick)
+  ASSERT_EQ(o.replan_backoff_after, 10);
   GoTo g(o, r.o.slam.geometry, r.o.slam.mounts);
   ASSERT_TRUE(g.TryGoal({0.35, 0}, 0, true, r.slam, r.bumps));  // nothing seen yet: a path
   EXPECT_EQ(g.planner_stats().plans, 1u);
@@ -127,10 +128,10 @@ TEST(GoToTest, AFailedPlanWhileBlockedBacksOffAndLooksAround) {
     EXPECT_DOUBLE_EQ(res.twist.v, 0) << i;
     EXPECT_DOUBLE_EQ(res.twist.omega, 2.5 * 0.3) << i;  // k_heading * look_around_factor
   }
-  // Plans at 0, 0.12, 0.34 and 0.78 s (back-off 0.107, 0.214, 0.428, then 0.856 s):
-  // 4 in a second instead of 50.
-  EXPECT_EQ(g.planner_stats().plans, 5u);
-  EXPECT_EQ(g.planner_stats().failed, 4u);
+  // Plans every period up to the 10th failure (0.18 s), then at 0.30, 0.52 and
+  // 0.96 s (back-off 0.107, 0.214, 0.428, then 0.856 s): 13 in a second, not 50.
+  EXPECT_EQ(g.planner_stats().plans, 14u);
+  EXPECT_EQ(g.planner_stats().failed, 13u);
 }
 
 // The planner keeps its grids between calls and answers a goal that the last
