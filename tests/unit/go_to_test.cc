@@ -114,7 +114,8 @@ namespace {
 TEST(GoToTest, AFailedPlanWhileBlockedBacksOffAndLooksAround) {
   Rig r;
   GoToOptions o;
-  o.replan_backoff_s = 0.107;  // (off the 20 ms grid, so no retry falls on a tick)
+  EXPECT_EQ(o.replan_backoff_s, 0);  // off by default
+  o.replan_backoff_s = 0.107;        // (off the 20 ms grid, so no retry falls on a tick)
   ASSERT_EQ(o.replan_backoff_after, 10);
   GoTo g(o, r.o.slam.geometry, r.o.slam.mounts);
   ASSERT_TRUE(g.TryGoal({0.35, 0}, 0, true, r.slam, r.bumps));  // nothing seen yet: a path
