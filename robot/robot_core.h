@@ -127,6 +127,7 @@ class RobotCore {
   bool fault_latched_ = false;  // LatchFault
   double last_heartbeat_ = -1e9;
   double last_tick_s_ = -1;
+  bool graced_last_tick_ = false;  // the last tick did not judge the controller (stalled)
   uint64_t loop_stalls_ = 0;
   WheelCommand last_cmd_;
 };

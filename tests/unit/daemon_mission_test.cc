@@ -281,5 +281,26 @@ TEST_F(DaemonMissionTest, ALoopStallWithFramesQueuedIsNoControllerLossButSilence
   EXPECT_EQ(s["period"]["loop_stalls"], 1);
 }
 
+// The stall grace is one tick: a loop that stays slow (every tick late) with a
+// silent controller still faults, at the second late tick.
+TEST_F(DaemonMissionTest, AStallGraceLastsOneTickSoASlowLoopStillFindsADeadController) {
+  Open();
+  Run(1);
+  ASSERT_TRUE(Call("start").contains("result"));
+  Run(2);
+  ASSERT_EQ(daemon_->StatusJson()["state"], "wall_follow");
+  now_ += std::chrono::milliseconds(150);  // no frames: the controller is silent
+  Pump();
+  daemon_->Tick();
+  EXPECT_EQ(daemon_->StatusJson()["state"], "wall_follow");  // stalled: not judged
+  now_ += std::chrono::milliseconds(150);
+  Pump();
+  daemon_->Tick();  // late again, but the grace was had
+  const auto s = daemon_->StatusJson();
+  EXPECT_EQ(s["state"], "fault");
+  EXPECT_EQ(s["reason"], "controller lost: encoder frames timed out");
+  EXPECT_EQ(s["period"]["loop_stalls"], 1);
+}
+
 }  // namespace
 }  // namespace irslam
