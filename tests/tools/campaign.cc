@@ -101,7 +101,7 @@ RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::Core
   s.seed = seed;
   s.profile = profile;
   s.world = world.name;
-  sim::InProcessRun run = sim::RunInProcess(world, options, seed, max_time_s);
+  sim::InProcessRun run = sim::RunInProcess(world, options, seed, max_time_s, nullptr, nullptr, metrics::ThreadCpuNs);
   s.done = run.core->state() == control::MissionState::kDone;
   s.end_state = control::ToString(run.core->state());
   s.robot_time_s = run.t;
@@ -270,8 +270,8 @@ std::string RobustnessReport(const std::vector<std::vector<RunScore>>& by_profil
   md << "\n![final position error](robustness_final_error.svg)\n\n![robot time](robustness_robot_time.svg)\n\n";
   // The control loop's work per period (issue 15): the ten runs with the largest period.
   md << "## Control-loop work per period\n\n"
-        "Each control period's work (the frames since the last period, then the tick), on this host's clock "
-        "while the campaign ran (`--jobs` runs at once): so the numbers move with the load. Per profile the "
+        "Each control period's work (the frames since the last period, then the tick), in the run's thread CPU "
+        "time (`--jobs` runs at once; the real-time factor counts the host's load, the periods do not). Per profile the "
         "largest period over all runs and the runs with the largest ones; *phase*: what took most of that "
         "period.\n\n"
         "| profile | seed | world | robot time s | tick p99 ms | tick max ms | phase | x real time |\n"
