@@ -19,6 +19,11 @@ options::Table<GoToOptions> GoToKeys() {
       {"k_heading", &O::k_heading, 0.1, 20, "rad/s/rad", "turn rate per radian of heading error"},
       {"replan_period_s", &O::replan_period_s, 0.1, 60, "s",
        "the path is planned again this often"},
+      {"replan_backoff_s", &O::replan_backoff_s, 0, 60, "s",
+       "blocked ahead and no path found: plan again after this, doubling each time up to replan_period_s "
+       "(0: every period)"},
+      {"replan_backoff_after", &O::replan_backoff_after, 1, 1000, "",
+       "... once this many plans in a row failed (before, every period)"},
       {"front_stop_m", &O::front_stop_m, 0.1, 2, "m",
        "something this close ahead: stop and plan around it"},
       {"go_to_timeout_s", &O::go_to_timeout_s, 1, 3600, "s",
@@ -86,6 +91,18 @@ void GoTo::Begin(double t) {
   same_contact_escapes_ = 0;
   last_plan_ = t;
   arrived_ = false;
+  last_plan_ok_ = true;
+  plan_failures_ = 0;
+  retry_at_ = -1e9;
+}
+
+std::optional<std::vector<Eigen::Vector2d>> GoTo::Plan(const std::vector<Obstacle>& obstacles,
+                                                        const Eigen::Vector2d& start,
+                                                        const PlannerOptions& po) {
+  const int64_t t0 = clock_ ? clock_() : 0;
+  auto path = planner_.Plan(obstacles, start, p1_, po);
+  if (clock_) planning_ns_ += clock_() - t0;
+  return path;
 }
 
 bool GoTo::Replan(const slam::Slam& slam, const RangeScan& scan, const BumpMemory& bumps) {
@@ -111,7 +128,7 @@ bool GoTo::Replan(const slam::Slam& slam, const RangeScan& scan, const BumpMemor
   PlannerOptions po = o.planner;
   po.inflation_m = radius_m_ + o.clearance_m;
   po.hard_m = radius_m_ + o.hard_clearance_m;
-  auto path = PlanPath(obstacles, {me.x, me.y}, p1_, po);
+  auto path = Plan(obstacles, {me.x, me.y}, po);
   if (!path) return false;
   // Keep the path being followed while it is still clear and not much longer
   // than the new one: near a tight spot two ways round are often about as long,
@@ -244,11 +261,25 @@ GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_s
   // Something close ahead stops the robot and makes it plan around it.
   const RangeScan scan = bumps.Apply(raw_scan, me);
   const std::optional<double> front = Front(scan, follower);
-  if ((front && *front < o.front_stop_m) || t - last_plan_ > o.replan_period_s) {
+  const bool blocked = front && *front < o.front_stop_m;
+  // Blocked: replan at once, but after a failed plan only when the back-off
+  // allows (a failed search floods the whole grid; every period was too much).
+  if ((blocked && t >= retry_at_) || t - last_plan_ > o.replan_period_s) {
     last_plan_ = t;
-    if (!Replan(slam, scan, bumps) && front && *front < o.front_stop_m) {
-      return Drive({0, o.k_heading * o.look_around_factor});  // blocked: look around
+    last_plan_ok_ = Replan(slam, scan, bumps);
+    if (last_plan_ok_) {
+      plan_failures_ = 0;
+      retry_at_ = -1e9;
+    } else {
+      ++plan_failures_;
+      const int over = plan_failures_ - std::max(1, o.replan_backoff_after);
+      retry_at_ = o.replan_backoff_s <= 0 || over < 0
+                      ? -1e9
+                      : t + std::min(o.replan_period_s, o.replan_backoff_s * std::ldexp(1.0, std::min(over, 20)));
     }
+    if (!last_plan_ok_ && blocked) return Drive({0, o.k_heading * o.look_around_factor});  // blocked: look around
+  } else if (blocked && !last_plan_ok_) {
+    return Drive({0, o.k_heading * o.look_around_factor});  // blocked, backing off: look around
   }
   if (arrived_ || (pos - p1_).norm() < o.goal_tolerance_m) {
     if (!align_) {

@@ -118,6 +118,9 @@ class Mission {
   int target_object() const { return target_; }
   // The go-to path (internal frame), for status and drawings.
   const std::vector<Eigen::Vector2d>& path() const { return go_to_.path(); }
+  // Planning's share of the work (issue 15): the shell injects the clock.
+  void SetWorkClock(WorkClock clock) { go_to_.SetWorkClock(std::move(clock)); }
+  const GoTo& go_to() const { return go_to_; }
   double started_at() const { return started_at_; }
   // Cleaning progress (state none when cleaning never ran since the last start).
   CleaningProgress cleaning(double t, double distance_m) const {

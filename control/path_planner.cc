@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <queue>
+#include <cstdlib>
+#include <functional>
 
 namespace irslam::control {
 namespace {
@@ -48,10 +49,11 @@ struct Grid {
 };
 
 // Clearance of each cell: the distance to the nearest obstacle, up to the inflation.
-std::vector<float> Clearances(const std::vector<Obstacle>& obstacles, const Grid& grid,
-                              double inflation_m) {
+void Clearances(const std::vector<Obstacle>& obstacles, const Grid& grid, double inflation_m,
+                std::vector<float>* out) {
   const int nx = grid.nx, ny = grid.ny;
-  std::vector<float> clear(static_cast<size_t>(nx * ny), static_cast<float>(inflation_m));
+  std::vector<float>& clear = *out;
+  clear.assign(static_cast<size_t>(nx * ny), static_cast<float>(inflation_m));
   for (const auto& ob : obstacles) {
     // Only cells near the obstacle's bounding box can be blocked by it.
     const Eigen::Vector2d a = ob.a.cwiseMin(ob.b).array() - inflation_m;
@@ -65,28 +67,50 @@ std::vector<float> Clearances(const std::vector<Obstacle>& obstacles, const Grid
       }
     }
   }
-  return clear;
 }
 
-// A* (8-connected) from cell (sx, sy) to (gx, gy): each cell's predecessor (-1: none).
-std::vector<int> Search(const Grid& grid, const std::vector<float>& clear, int sx, int sy, int gx,
-                        int gy, const PlannerOptions& o) {
-  const int nx = grid.nx, ny = grid.ny;
-  const int n = nx * ny;
-  std::vector<double> g(static_cast<size_t>(n), 1e18);
-  std::vector<int> from(static_cast<size_t>(n), -1);
-  using Item = std::pair<double, int>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
+bool SameObstacles(const std::vector<Obstacle>& a, const std::vector<Obstacle>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (a[i].a != b[i].a || a[i].b != b[i].b) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+// hypot(dx, dy) exactly as the search always computed it (hypot takes absolute
+// values, so the table by |dx|, |dy| gives the same numbers), computed once.
+double PathPlanner::H(int dx, int dy) {
+  const int ax = std::abs(dx), ay = std::abs(dy);
+  double& h = hypot_[static_cast<size_t>(ay * hypot_nx_ + ax)];
+  if (h < 0) h = std::hypot(dx, dy);
+  return h;
+}
+
+// A* (8-connected) from cell (sx, sy) to (gx, gy): each cell's predecessor in
+// from_ (-1: none), its cost in g_. The same search as ever; the open list is a
+// binary heap of (f, cell) ordered like std::priority_queue's (std::push_heap /
+// pop_heap with std::greater), so cells come off it in the same order.
+void PathPlanner::Search(int sx, int sy, int gx, int gy, const PlannerOptions& o) {
+  const int nx = geo_.nx, ny = geo_.ny;
+  const size_t n = static_cast<size_t>(nx) * static_cast<size_t>(ny);
+  g_.assign(n, 1e18);
+  from_.assign(n, -1);
+  open_.clear();
+  const auto cmp = std::greater<>();
   const int s = sy * nx + sx, goal_i = gy * nx + gx;
-  const auto h = [&](int i) { return std::hypot(i % nx - gx, i / nx - gy); };
-  g[static_cast<size_t>(s)] = 0;
-  open.push({h(s), s});
+  const auto h = [&](int i) { return H(i % nx - gx, i / nx - gy); };
+  g_[static_cast<size_t>(s)] = 0;
+  open_.push_back({h(s), s});
   const int dx[8] = {1, -1, 0, 0, 1, 1, -1, -1}, dy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
-  while (!open.empty()) {
-    const auto [f, i] = open.top();
-    open.pop();
+  while (!open_.empty()) {
+    std::pop_heap(open_.begin(), open_.end(), cmp);
+    const auto [f, i] = open_.back();
+    open_.pop_back();
+    ++stats_.pops;
     if (i == goal_i) break;
-    if (f > g[static_cast<size_t>(i)] + h(i) + 1e-9) continue;
+    if (f > g_[static_cast<size_t>(i)] + h(i) + 1e-9) continue;
     const int ix = i % nx, iy = i / nx;
     for (int k = 0; k < 8; ++k) {
       const int jx = ix + dx[k], jy = iy + dy[k];
@@ -95,29 +119,26 @@ std::vector<int> Search(const Grid& grid, const std::vector<float>& clear, int s
       // Cells within the inflation may be crossed only near the start, to get out
       // of a tight spot; within hard_m only moving away from the obstacle (the
       // robot may stand that close to where a mapped side is assumed to go on).
-      const float cj = clear[static_cast<size_t>(j)];
+      const float cj = clear_[static_cast<size_t>(j)];
       if (cj < o.inflation_m) {
-        if (std::hypot(jx - sx, jy - sy) * o.resolution_m > o.inflation_m + o.resolution_m)
-          continue;
-        if (cj < o.hard_m && cj < clear[static_cast<size_t>(i)]) continue;
+        if (H(jx - sx, jy - sy) * o.resolution_m > o.inflation_m + o.resolution_m) continue;
+        if (cj < o.hard_m && cj < clear_[static_cast<size_t>(i)]) continue;
       }
-      const double c = g[static_cast<size_t>(i)] + (k < 4 ? 1.0 : M_SQRT2);
-      if (c < g[static_cast<size_t>(j)]) {
-        g[static_cast<size_t>(j)] = c;
-        from[static_cast<size_t>(j)] = i;
-        open.push({c + h(j), j});
+      const double c = g_[static_cast<size_t>(i)] + (k < 4 ? 1.0 : M_SQRT2);
+      if (c < g_[static_cast<size_t>(j)]) {
+        g_[static_cast<size_t>(j)] = c;
+        from_[static_cast<size_t>(j)] = i;
+        open_.push_back({c + h(j), j});
+        std::push_heap(open_.begin(), open_.end(), cmp);
       }
     }
   }
-  return from;
 }
 
-}  // namespace
-
-std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>& obstacles,
-                                                     const Eigen::Vector2d& start,
-                                                     const Eigen::Vector2d& goal,
-                                                     const PlannerOptions& o) {
+std::optional<std::vector<Eigen::Vector2d>> PathPlanner::Plan(
+    const std::vector<Obstacle>& obstacles, const Eigen::Vector2d& start,
+    const Eigen::Vector2d& goal, const PlannerOptions& o) {
+  ++stats_.plans;
   Eigen::Vector2d lo = start.cwiseMin(goal), hi = start.cwiseMax(goal);
   for (const auto& ob : obstacles) {
     lo = lo.cwiseMin(ob.a).cwiseMin(ob.b);
@@ -125,25 +146,62 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
   }
   lo.array() -= o.margin_m;
   hi.array() += o.margin_m;
+  Geometry geo;
+  geo.lo = lo;
+  geo.res = o.resolution_m;
+  geo.nx = static_cast<int>(std::ceil((hi.x() - lo.x()) / o.resolution_m)) + 1;
+  geo.ny = static_cast<int>(std::ceil((hi.y() - lo.y()) / o.resolution_m)) + 1;
+  const int nx = geo.nx, ny = geo.ny;
+  if (static_cast<long>(nx) * ny > 4'000'000) {
+    ++stats_.failed;
+    return std::nullopt;
+  }
   Grid grid;
-  grid.lo = lo;
-  grid.res = o.resolution_m;
-  grid.nx = static_cast<int>(std::ceil((hi.x() - lo.x()) / o.resolution_m)) + 1;
-  grid.ny = static_cast<int>(std::ceil((hi.y() - lo.y()) / o.resolution_m)) + 1;
-  const int nx = grid.nx, ny = grid.ny;
-  if (static_cast<long>(nx) * ny > 4'000'000) return std::nullopt;
-  const std::vector<float> clear = Clearances(obstacles, grid, o.inflation_m);
+  grid.lo = geo.lo;
+  grid.res = geo.res;
+  grid.nx = nx;
+  grid.ny = ny;
+  if (geo == geo_ && clear_inflation_m_ == o.inflation_m && SameObstacles(obstacles, obstacles_)) {
+    ++stats_.clearance_reused;
+  } else {
+    geo_ = geo;
+    clear_inflation_m_ = o.inflation_m;
+    obstacles_ = obstacles;
+    Clearances(obstacles, grid, o.inflation_m, &clear_);
+    failed_valid_ = false;
+  }
+  if (nx > hypot_nx_ || ny > hypot_ny_) {
+    hypot_nx_ = std::max(nx, hypot_nx_);
+    hypot_ny_ = std::max(ny, hypot_ny_);
+    hypot_.assign(static_cast<size_t>(hypot_nx_) * static_cast<size_t>(hypot_ny_), -1.0);
+  }
   const auto [sx, sy] = grid.Cell(start);
   const auto [gx, gy] = grid.Cell(goal);
   if (gx < 0 || gy < 0 || gx >= nx || gy >= ny ||
-      clear[static_cast<size_t>(gy * nx + gx)] < o.inflation_m) {
+      clear_[static_cast<size_t>(gy * nx + gx)] < o.inflation_m) {
+    ++stats_.failed;
     return std::nullopt;
   }
-  const std::vector<int> from = Search(grid, clear, sx, sy, gx, gy, o);
   const int s = sy * nx + sx, goal_i = gy * nx + gx;
-  if (from[static_cast<size_t>(goal_i)] < 0 && goal_i != s) return std::nullopt;
+  if (failed_valid_ && failed_start_ == s && failed_hard_m_ == o.hard_m &&
+      g_[static_cast<size_t>(goal_i)] >= 1e18) {
+    // The last search from here visited every cell that can be reached: not this one.
+    ++stats_.failed;
+    ++stats_.known_unreachable;
+    return std::nullopt;
+  }
+  ++stats_.searches;
+  Search(sx, sy, gx, gy, o);
+  failed_valid_ = false;
+  if (from_[static_cast<size_t>(goal_i)] < 0 && goal_i != s) {
+    failed_valid_ = true;
+    failed_start_ = s;
+    failed_hard_m_ = o.hard_m;
+    ++stats_.failed;
+    return std::nullopt;
+  }
   std::vector<Eigen::Vector2d> cells;
-  for (int i = goal_i; i != -1; i = from[static_cast<size_t>(i)])
+  for (int i = goal_i; i != -1; i = from_[static_cast<size_t>(i)])
     cells.push_back(grid.Centre(i % nx, i / nx));
   std::reverse(cells.begin(), cells.end());
   // Keep the corners only.
@@ -154,6 +212,14 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
   }
   path.push_back(goal);
   return path;
+}
+
+std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>& obstacles,
+                                                     const Eigen::Vector2d& start,
+                                                     const Eigen::Vector2d& goal,
+                                                     const PlannerOptions& o) {
+  PathPlanner planner;
+  return planner.Plan(obstacles, start, goal, o);
 }
 
 bool PathClear(const std::vector<Obstacle>& obstacles, const std::vector<Eigen::Vector2d>& path,

@@ -1,10 +1,18 @@
 // Grid path planning for the go-to behaviour: A* (8-connected) on an occupancy
 // grid made from the mapped lines and any extra obstacle points (IR readings),
 // inflated by the robot radius plus a clearance. Pure.
+//
+// PathPlanner keeps its grids between calls (issue 15): no allocation once the
+// grid's size is known, the clearance grid reused while the obstacles and the
+// grid are the same, the heuristic's distances (hypot) tabulated by cell offset,
+// and a goal the last failed search from the same start cell could not reach is
+// answered at once (a failed A* visits every reachable cell: that set is kept).
+// The search itself is unchanged: the same paths as before, cell for cell.
 #ifndef IRSLAM_CONTROL_PATH_PLANNER_H_
 #define IRSLAM_CONTROL_PATH_PLANNER_H_
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -41,6 +49,52 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
                                                      const Eigen::Vector2d& start,
                                                      const Eigen::Vector2d& goal,
                                                      const PlannerOptions& options);
+
+// The same, keeping its buffers and caches between calls (one per go-to).
+class PathPlanner {
+ public:
+  std::optional<std::vector<Eigen::Vector2d>> Plan(const std::vector<Obstacle>& obstacles,
+                                                   const Eigen::Vector2d& start,
+                                                   const Eigen::Vector2d& goal,
+                                                   const PlannerOptions& options);
+  struct Stats {
+    uint64_t plans = 0;         // calls
+    uint64_t searches = 0;      // A* searches run
+    uint64_t failed = 0;        // calls that found no path
+    uint64_t known_unreachable = 0;  // ... answered from the last failed search
+    uint64_t clearance_reused = 0;   // calls that reused the clearance grid
+    uint64_t pops = 0;          // A* queue pops, all searches
+  };
+  const Stats& stats() const { return stats_; }
+
+ private:
+  struct Geometry {
+    Eigen::Vector2d lo = Eigen::Vector2d::Zero();
+    int nx = 0, ny = 0;
+    double res = 0;
+    bool operator==(const Geometry& o) const {
+      return lo == o.lo && nx == o.nx && ny == o.ny && res == o.res;
+    }
+  };
+  void Search(int sx, int sy, int gx, int gy, const PlannerOptions& o);
+  double H(int dx, int dy);
+
+  Geometry geo_;
+  std::vector<Obstacle> obstacles_;  // what clear_ was made from
+  double clear_inflation_m_ = -1;
+  std::vector<float> clear_;
+  std::vector<double> g_;
+  std::vector<int> from_;
+  std::vector<std::pair<double, int>> open_;  // a binary heap, as std::priority_queue keeps it
+  std::vector<double> hypot_;  // hypot(|dx|, |dy|) by offset, -1: not computed yet
+  int hypot_nx_ = 0, hypot_ny_ = 0;
+  // The last failed search: from this start cell on this clearance grid, the
+  // cells with a finite g_ were all that can be reached.
+  bool failed_valid_ = false;
+  int failed_start_ = -1;
+  double failed_hard_m_ = 0;
+  Stats stats_;
+};
 
 // Whether a path (from the robot's position) still keeps at least `clearance_m`
 // from every obstacle, beyond its first `skip_m` (where the robot stands now).

@@ -22,7 +22,8 @@ RpcMethodTable Daemon::MakeMethods() {
          c.params["mode"] = "clean";
          return Start(c);
        }},
-      {"stop", Access::kControl, [this](const rpc::Request& r) { return Stop(r); }},
+      // Carried out by Daemon::Handle: its reply waits for the map writer's outcome.
+      {"stop", Access::kControl, nullptr},
   });
 }
 
@@ -62,19 +63,35 @@ nlohmann::json Daemon::Start(const rpc::Request& req) {
   return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
 }
 
-nlohmann::json Daemon::Stop(const rpc::Request& req) {
+void Daemon::Stop(const rpc::Request& req, Reply reply) {
   const double now = RobotNow();
   core_->Stop(now);
   if (recorder_) recorder_->Note("stop", now);
   SendFrame(core_->StopFrame(), now);  // at once, not at the next period
   ApplyOutputs(now);
   const SaveResult saved = maps_.Save("stop", [this] { return LiveMap(); });
+  if (saved == SaveResult::kQueued) {
+    // Being written on the writer thread: the reply tells its outcome when it comes
+    // (OnMapWritten); the control loop goes on meanwhile.
+    stop_waiters_.push_back({req.id, std::move(reply)});
+    return;
+  }
+  reply(StopReply(req.id, saved));
+}
+
+nlohmann::json Daemon::StopReply(const nlohmann::json& id, SaveResult saved) {
   std::fprintf(stderr, "<6>irslamd: stopped by request (map: %s)\n", ToString(saved));
   if (saved == SaveResult::kFailed) {
     // The wheels are stopped; the caller must not believe the map is safe.
-    return rpc::MakeError(req.id, rpc::kMapNotSaved, "stopped, but the map was not saved: " + maps_.error());
+    return rpc::MakeError(id, rpc::kMapNotSaved, "stopped, but the map was not saved: " + maps_.error());
   }
-  return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}, {"map", ToString(saved)}});
+  return rpc::MakeResult(id, {{"state", control::ToString(core_->state())}, {"map", ToString(saved)}});
+}
+
+void Daemon::OnMapWritten(SaveResult result) {
+  auto waiters = std::move(stop_waiters_);
+  stop_waiters_.clear();
+  for (auto& w : waiters) w.reply(StopReply(w.id, result));
 }
 
 }  // namespace irslam

@@ -28,6 +28,30 @@ nlohmann::json GpioJson(const drivers::Gpio& gpio) {
 
 }  // namespace
 
+// The per-period work (issue 15), seconds: quantiles of the fixed-bucket
+// histogram (a bucket's upper edge, at most 12.5 % high), the maximum per
+// phase, and the worst period by phase.
+static nlohmann::json TickProfileJson(const robot::TickProfile& p) {
+  using robot::TickPhase;
+  const auto& w = p.work();
+  nlohmann::json phase_max = nlohmann::json::object(), worst = nlohmann::json::object();
+  for (int i = 0; i < robot::kNumTickPhases; ++i) {
+    const auto ph = static_cast<TickPhase>(i);
+    phase_max[robot::ToString(ph)] = static_cast<double>(p.phase_max(ph)) * 1e-9;
+    worst[robot::ToString(ph)] = static_cast<double>(p.worst()[ph]) * 1e-9;
+  }
+  worst["robot_time"] = p.worst_t();
+  worst["phase"] = robot::ToString(p.worst_phase());
+  return {{"p50", static_cast<double>(w.Quantile(0.5)) * 1e-9},
+          {"p99", static_cast<double>(w.Quantile(0.99)) * 1e-9},
+          {"p999", static_cast<double>(w.Quantile(0.999)) * 1e-9},
+          {"max", static_cast<double>(w.max()) * 1e-9},
+          {"mean", w.mean() * 1e-9},
+          {"periods", w.count()},
+          {"phase_max", phase_max},
+          {"worst", worst}};
+}
+
 nlohmann::json Daemon::StatusJson() {
   const double now = RobotNow();
   nlohmann::json s = ToJson(core_->Status(now));
@@ -39,7 +63,13 @@ nlohmann::json Daemon::StatusJson() {
                  {"jitter_mean", scheduler_.mean_late_ns() * 1e-9},
                  {"jitter_max", static_cast<double>(scheduler_.max_late_ns()) * 1e-9},
                  {"jitter_last", static_cast<double>(scheduler_.last_late_ns()) * 1e-9},
-                 {"work_max", max_work_s_}};
+                 {"work_max", max_work_s_},
+                 {"work", TickProfileJson(profile_)},
+                 {"loop_stalls", core_->loop_stalls()}};
+  const auto& ps = core_->planner_stats();
+  s["period"]["planner"] = {{"plans", ps.plans},       {"searches", ps.searches},
+                            {"failed", ps.failed},     {"known_unreachable", ps.known_unreachable},
+                            {"pops", ps.pops}};
   if (bus_) {
     s["can"] = CanJson(*bus_);
     foreign_.AddStatus(WallNow(), &s["can"]);

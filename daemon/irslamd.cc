@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <ctime>
 #include <thread>
+#include <utility>
 
 #include "daemon/config.h"
 #include "daemon/core_json.h"
@@ -34,8 +35,11 @@ Daemon::Daemon(boost::asio::io_context& io, DaemonOptions options, robot::CoreOp
       scheduler_(PeriodNs(core, options_.time_scale), Ns(start_)),
       notifier_(options_.notify_socket),
       watchdog_(options_.watchdog_usec),
-      maps_(core.state_dir, clock_),
-      methods_(MakeMethods()) {}
+      maps_(core.state_dir, clock_, MapService::kDefaultMinIntervalS, &io),
+      methods_(MakeMethods()) {
+  maps_.set_written([this](SaveResult r) { OnMapWritten(r); });
+  core_->SetWorkClock([this] { return Ns(clock_()); });
+}
 
 Daemon::~Daemon() = default;
 
@@ -110,7 +114,9 @@ void Daemon::OnFrame(const can_frame& f) {
   const double now = RobotNow();  // one time for the core and the recording
   if (recorder_) recorder_->Record(f, now);
   if (!ForeignCommanderWatch::IsCommanderFrame(f)) {
+    const int64_t t0 = Ns(clock_());
     core_->OnFrame(f, now);
+    frames_ns_ += Ns(clock_()) - t0;
     return;
   }
   if (foreign_.OnFrame(WallNow())) {
@@ -170,6 +176,7 @@ void Daemon::ArmTimer() {
 }
 
 void Daemon::Tick() {
+  using robot::TickPhase;
   const WallTime woke = clock_();
   scheduler_.OnWake(Ns(woke));
   if (api_) api_->NewPeriod();
@@ -178,13 +185,27 @@ void Daemon::Tick() {
     std::fprintf(stderr, "<3>irslamd: --test-hang-at: the control loop hangs now (a test of the watchdog)\n");
     for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
   }
-  for (const can_frame& f : core_->Tick(now)) SendFrame(f, now);
+  robot::TickWork work;
+  work[TickPhase::kSlam] = std::exchange(frames_ns_, 0);
+  const int64_t planned0 = core_->planning_ns();
+  const int64_t t_core = Ns(clock_());
+  std::vector<can_frame> out = core_->Tick(now);
+  const int64_t t_core_end = Ns(clock_());
+  work[TickPhase::kPlanning] = core_->planning_ns() - planned0;
+  work[TickPhase::kMission] = t_core_end - t_core - work[TickPhase::kPlanning];
+  for (const can_frame& f : out) SendFrame(f, now);
   ApplyOutputs(now);
-  OnStateChange(now);
+  const int64_t t_map = Ns(clock_());
+  OnStateChange(now);  // the model's save: built and handed to the writer
   maps_.Poll([this] { return LiveMap(); });
+  const int64_t t_map_end = Ns(clock_());
+  work[TickPhase::kMapSave] = t_map_end - t_map;
   // The watchdog is fed from the loop itself, so a stalled loop is noticed.
   if (watchdog_.Due(WallNow())) notifier_.Send("WATCHDOG=1");
-  max_work_s_ = std::max(max_work_s_, SecondsBetween(woke, clock_()));
+  const WallTime done = clock_();
+  work[TickPhase::kOther] = (Ns(done) - Ns(woke)) - (t_core_end - t_core) - (t_map_end - t_map);
+  profile_.Add(work, now);
+  max_work_s_ = std::max(max_work_s_, SecondsBetween(woke, done));
 }
 
 void Daemon::OnStateChange(double now) {
@@ -223,7 +244,9 @@ int Daemon::Shutdown() {
   core_->Stop(now);  // not noted for the replay: it ends in the mission's state
   SendFrame(core_->StopFrame(), now);
   if (gpio_) gpio_->Close();  // motor driver disabled, LED off
-  if (maps_.Save("shutdown", [this] { return LiveMap(); }, /*final=*/true) == SaveResult::kFailed) {
+  // Not in a tick: waits for the write in flight (a stop waiting for it is
+  // answered), then writes the final map synchronously.
+  if (maps_.Flush("shutdown", [this] { return LiveMap(); }) == SaveResult::kFailed) {
     std::fprintf(stderr, "<3>irslamd: the final map save failed: exit status 1\n");
     exit_status_ = 1;
   }
@@ -281,6 +304,7 @@ void Daemon::ApplyOptions(robot::CoreOptions fresh) {
   maps_.OnCoreReplaced(LiveMap());  // the old core's map is kept (and saved if it was not)
   core_options_ = fresh;
   core_ = std::make_unique<robot::RobotCore>(fresh);
+  core_->SetWorkClock([this] { return Ns(clock_()); });
   if (foreign_.Present(WallNow())) core_->LatchFault(RobotNow(), kForeignCommanderReason);
   if (gpio_) gpio_->Replay();  // the new core learns the inputs' present levels
   scheduler_ = PeriodScheduler(PeriodNs(fresh, options_.time_scale), Ns(clock_()));
@@ -291,6 +315,10 @@ bool Daemon::MaySubscribe(const PeerCred& peer) {
 }
 
 void Daemon::Handle(const rpc::Request& req, const PeerCred& peer, Reply reply) {
+  if (req.method == "stop" && methods_.Allowed(access_, peer, methods_.Needs("stop"))) {
+    Stop(req, std::move(reply));
+    return;
+  }
   reply(methods_.Handle(req, peer, access_));
 }
 

@@ -15,8 +15,10 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "robot/robot_core.h"
+#include "robot/tick_profile.h"
 #include "daemon/access.h"
 #include "daemon/api_server.h"
 #include "daemon/bus_recorder.h"
@@ -73,6 +75,7 @@ class Daemon : public ApiServer::Dispatcher {
   nlohmann::json StatusNotification() override { return StatusJson(); }
 
   nlohmann::json StatusJson();
+  const robot::TickProfile& tick_profile() const { return profile_; }
   const RpcMethodTable& methods() const { return methods_; }
   const robot::CoreOptions& core_options() const { return core_options_; }
   const MapService& maps() const { return maps_; }
@@ -89,7 +92,10 @@ class Daemon : public ApiServer::Dispatcher {
   nlohmann::json LiveMap() const { return ToJson(core_->Map()); }
   RpcMethodTable MakeMethods();  // daemon_rpc.cc
   nlohmann::json Start(const rpc::Request& req);
-  nlohmann::json Stop(const rpc::Request& req);
+  // stop: the wheels at once; the reply when the map's save has an outcome.
+  void Stop(const rpc::Request& req, Reply reply);
+  nlohmann::json StopReply(const nlohmann::json& id, SaveResult saved);
+  void OnMapWritten(SaveResult result);  // the map writer's outcome, on the loop
   void ArmTimer();
   void OnSignal(int signo);
   void WaitSignal();
@@ -120,6 +126,10 @@ class Daemon : public ApiServer::Dispatcher {
   boost::asio::signal_set signals_;
   PeriodScheduler scheduler_;
   double max_work_s_ = 0;
+  // Each period's work by phase (issue 15): the frames handled since the last
+  // tick (SLAM) plus the tick itself, measured here around the core's calls.
+  robot::TickProfile profile_;
+  int64_t frames_ns_ = 0;  // OnFrame since the last tick
   control::MissionState last_state_ = control::MissionState::kIdle;
   bool running_ = false;
   int exit_status_ = 0;
@@ -128,6 +138,11 @@ class Daemon : public ApiServer::Dispatcher {
   SdNotifier notifier_;
   WatchdogPacer watchdog_;
   MapService maps_;
+  struct StopWaiter {
+    nlohmann::json id;
+    Reply reply;
+  };
+  std::vector<StopWaiter> stop_waiters_;  // stop requests waiting for the map writer
   ForeignCommanderWatch foreign_;
   RpcMethodTable methods_;
   std::unique_ptr<BusRecorder> recorder_;  // [record] enabled

@@ -19,13 +19,22 @@ const char* ToString(SaveResult r) {
     case SaveResult::kNothing: return "nothing";
     case SaveResult::kDeferred: return "deferred";
     case SaveResult::kFailed: return "failed";
+    case SaveResult::kQueued: return "queued";
   }
   return "?";
 }
 
-MapService::MapService(std::string state_dir, WallClock clock, double min_interval_s)
+MapService::MapService(std::string state_dir, WallClock clock, double min_interval_s,
+                       boost::asio::io_context* io)
     : store_(std::move(state_dir)), path_(store_.path()), clock_(std::move(clock)),
-      min_interval_s_(min_interval_s) {}
+      min_interval_s_(min_interval_s) {
+  if (io != nullptr) {
+    writer_ = std::make_unique<MapWriter>(*io, store_.dir(), [this](MapWriter::Outcome o) {
+      const SaveResult r = Apply(o);
+      if (written_) written_(r);
+    });
+  }
+}
 
 void MapService::Load() {
   stored_ = store_.Load(&error_);
@@ -56,8 +65,30 @@ nlohmann::json MapService::Serve(const MapSource& live) const {
 }
 
 SaveResult MapService::Save(const char* reason, const MapSource& live, bool final) {
+  return SaveImpl(reason, live, final, /*sync=*/!writer_);
+}
+
+SaveResult MapService::Flush(const char* reason, const MapSource& live) {
+  if (writer_) {
+    if (auto o = writer_->Drain()) {
+      const SaveResult r = Apply(*o);
+      if (written_) written_(r);
+    }
+  }
+  return SaveImpl(reason, live, /*final=*/true, /*sync=*/true);
+}
+
+SaveResult MapService::SaveImpl(const char* reason, const MapSource& live, bool final, bool sync) {
   if (!live_ran_ && !held_) return last_result_ = SaveResult::kNothing;  // nothing new
   nlohmann::json map = live_ran_ ? live() : *held_;
+  if (in_flight_) {
+    // This very map is being written: its outcome is this save's.
+    if (map == in_flight_->map) return SaveResult::kQueued;
+    // A newer one: written when the writer is free (Poll).
+    ++deferred_;
+    pending_reason_ = reason;
+    return last_result_ = SaveResult::kDeferred;
+  }
   if (stored_ && map == stored_->map) {
     ++unchanged_;
     pending_reason_.reset();
@@ -68,36 +99,49 @@ SaveResult MapService::Save(const char* reason, const MapSource& live, bool fina
     pending_reason_ = reason;
     return last_result_ = SaveResult::kDeferred;
   }
-  return Write(reason, std::move(map));
+  return Write(reason, std::move(map), sync);
 }
 
 void MapService::Poll(const MapSource& live) {
-  if (!pending_reason_ || Now() - last_write_s_ < min_interval_s_) return;
+  if (!pending_reason_ || writing() || Now() - last_write_s_ < min_interval_s_) return;
   const std::string reason = *pending_reason_;
   pending_reason_.reset();
   Save(reason.c_str(), live);
 }
 
-SaveResult MapService::Write(const char* reason, nlohmann::json map) {
+SaveResult MapService::Write(const char* reason, nlohmann::json map, bool sync) {
   pending_reason_.reset();
-  StoredMap m;
-  m.seq = (stored_ ? stored_->seq : 0) + 1;
-  m.reason = reason;
-  m.map = std::move(map);
+  auto m = std::make_shared<StoredMap>();
+  m->seq = (stored_ ? stored_->seq : 0) + 1;
+  m->reason = reason;
+  m->map = std::move(map);
   const WallTime t0 = clock_();
   last_write_s_ = SecondsBetween(WallTime{}, t0);
-  std::string error;
-  const bool ok = store_.Save(m, &error);
-  last_save_ms_ = SecondsBetween(t0, clock_()) * 1e3;
-  if (ok) {
+  if (!sync && writer_) {
+    // Handed over immutable; the control loop goes on at once.
+    in_flight_ = std::move(m);
+    writer_->Submit(in_flight_);
+    return last_result_ = SaveResult::kQueued;
+  }
+  MapWriter::Outcome o;
+  o.ok = store_.Save(*m, &o.error);
+  o.ms = SecondsBetween(t0, clock_()) * 1e3;
+  o.map = std::move(m);
+  return Apply(o);
+}
+
+SaveResult MapService::Apply(const MapWriter::Outcome& o) {
+  in_flight_.reset();
+  last_save_ms_ = o.ms;
+  if (o.ok) {
     ++saves_;
-    stored_ = std::move(m);
+    stored_ = *o.map;
     error_.clear();
     return last_result_ = SaveResult::kSaved;
   }
   ++save_errors_;
-  error_ = error;
-  std::fprintf(stderr, "<3>irslamd: %s\n", error.c_str());
+  error_ = o.error;
+  std::fprintf(stderr, "<3>irslamd: %s\n", o.error.c_str());
   return last_result_ = SaveResult::kFailed;
 }
 
@@ -110,6 +154,7 @@ nlohmann::json MapService::StatusJson() const {
           {"unchanged", unchanged_},
           {"deferred", deferred_},
           {"pending", pending_reason_.has_value()},
+          {"writing", in_flight_ != nullptr},
           {"last_result", ToString(last_result_)},
           {"last_save_ms", last_save_ms_},
           {"error", error_}};

@@ -15,20 +15,33 @@
 //   - more often than once per min_interval_s, except the final save at shutdown:
 //     a save asked for sooner is "deferred" and done by Poll() when its time comes.
 // A save that fails is reported (Save's result, status.map_store.error, the log).
+//
+// With an io_context (the daemon), the file is written by a MapWriter thread
+// (daemon/map_writer.h): Save builds the snapshot, hands it over and returns
+// kQueued at once; the outcome arrives later on the io_context, updates the
+// status and is passed to the written() callback (the daemon answers a `stop`
+// waiting for it). A save asked for while one is in flight waits (pending) and
+// Poll() submits it when the writer is free. Without one (tests, tools) Save
+// writes synchronously, as before. The final save at shutdown (Flush) always
+// writes synchronously, after the write in flight.
 #ifndef IRSLAM_DAEMON_MAP_SERVICE_H_
 #define IRSLAM_DAEMON_MAP_SERVICE_H_
 
+#include <boost/asio/io_context.hpp>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 
 #include "daemon/map_store.h"
+#include "daemon/map_writer.h"
 #include "daemon/wall_clock.h"
 
 namespace irslam {
 
-enum class SaveResult { kSaved, kUnchanged, kNothing, kDeferred, kFailed };
+// kQueued: handed to the writer thread; the outcome (kSaved or kFailed) comes later.
+enum class SaveResult { kSaved, kUnchanged, kNothing, kDeferred, kFailed, kQueued };
 const char* ToString(SaveResult r);
 
 class MapService {
@@ -36,7 +49,13 @@ class MapService {
   using MapSource = std::function<nlohmann::json()>;  // the live core's map, built on demand
   static constexpr double kDefaultMinIntervalS = 5.0;
 
-  MapService(std::string state_dir, WallClock clock, double min_interval_s = kDefaultMinIntervalS);
+  // The outcome of a queued write (kSaved or kFailed), on the io_context.
+  using Written = std::function<void(SaveResult)>;
+
+  // io: write on a MapWriter thread and deliver outcomes there; nullptr: write synchronously.
+  MapService(std::string state_dir, WallClock clock, double min_interval_s = kDefaultMinIntervalS,
+             boost::asio::io_context* io = nullptr);
+  void set_written(Written w) { written_ = std::move(w); }
 
   // At start: reads the previous run's map (a bad file is moved aside and logged).
   void Load();
@@ -48,20 +67,25 @@ class MapService {
   void OnCoreReplaced(const nlohmann::json& old_map);
 
   nlohmann::json Serve(const MapSource& live) const;
-  // final: the save at shutdown (not rate-limited).
+  // final: not rate-limited (reload, shutdown).
   SaveResult Save(const char* reason, const MapSource& live, bool final = false);
+  // The save at shutdown: waits for the write in flight, then writes synchronously.
+  SaveResult Flush(const char* reason, const MapSource& live);
   // Once per control period: a deferred save whose time has come is done now.
   void Poll(const MapSource& live);
 
   bool has_live_map() const { return live_ran_; }
   bool save_pending() const { return pending_reason_.has_value(); }
+  bool writing() const { return in_flight_ != nullptr; }
   const std::string& error() const { return error_; }
   const std::optional<StoredMap>& stored() const { return stored_; }
   const std::string& path() const { return path_; }
   nlohmann::json StatusJson() const;
 
  private:
-  SaveResult Write(const char* reason, nlohmann::json map);
+  SaveResult SaveImpl(const char* reason, const MapSource& live, bool final, bool sync);
+  SaveResult Write(const char* reason, nlohmann::json map, bool sync);
+  SaveResult Apply(const MapWriter::Outcome& outcome);  // a finished write's outcome
   double Now() const { return SecondsBetween(WallTime{}, clock_()); }
 
   MapStore store_;
@@ -77,6 +101,9 @@ class MapService {
   double last_save_ms_ = 0;
   SaveResult last_result_ = SaveResult::kNothing;
   std::string error_;
+  std::shared_ptr<const StoredMap> in_flight_;  // handed to the writer, outcome not yet in
+  Written written_;
+  std::unique_ptr<MapWriter> writer_;  // last: its thread stops before the rest goes
 };
 
 }  // namespace irslam

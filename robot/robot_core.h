@@ -74,6 +74,8 @@ CoreOptions DefaultCoreOptions();
 
 class RobotCore {
  public:
+  // A tick later than this many periods after the previous one: the loop was stalled.
+  static constexpr double kStallPeriods = 2.5;
   explicit RobotCore(CoreOptions options);
 
   // A frame received from the bus at host robot time now_s.
@@ -114,6 +116,15 @@ class RobotCore {
   const std::vector<double>& loop_times() const { return mission_.loop_times(); }
   const CoreOptions& options() const { return options_; }
 
+  // A monotonic clock (ns) the shell lends the core to time its planning
+  // (tick_profile.h); the core itself never reads a clock.
+  void SetWorkClock(control::WorkClock clock) { mission_.SetWorkClock(std::move(clock)); }
+  int64_t planning_ns() const { return mission_.go_to().planning_ns(); }
+  const control::PathPlanner::Stats& planner_stats() const { return mission_.go_to().planner_stats(); }
+  // Ticks at which controller loss was not judged because the loop itself had
+  // been stalled (see Tick).
+  uint64_t loop_stalls() const { return loop_stalls_; }
+
  private:
   // The controller is lost or back, the e-stop released: the mission's fault follows.
   void UpdateFault(double now_s);
@@ -127,6 +138,9 @@ class RobotCore {
   bool estop_latched_ = false;
   bool fault_latched_ = false;  // LatchFault
   double last_heartbeat_ = -1e9;
+  double last_tick_s_ = -1;
+  bool graced_last_tick_ = false;  // the last tick did not judge the controller (stalled)
+  uint64_t loop_stalls_ = 0;
   WheelCommand last_cmd_;
 };
 

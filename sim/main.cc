@@ -7,6 +7,7 @@
 #include <boost/asio/steady_timer.hpp>
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -94,8 +95,16 @@ nlohmann::json FaultsJson(const FaultCounters& f) {
           {"flooded", f.flooded},   {"stuck", f.stuck},         {"glitched", f.glitched}};
 }
 
+// The CPU time of this thread (ns): what the work costs, without the time the
+// host gave to other processes (--tick-clock cpu, for a loaded host).
+static int64_t ThreadCpuNs() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
 int Run(const Common& c, double max_time, const std::string& map_out, const std::string& svg_out,
-        const std::string& lines_out, const std::string& events_out) {
+        const std::string& lines_out, const std::string& events_out, const std::string& tick_clock) {
   World world;
   robot::CoreOptions core_opts;
   uint64_t seed;
@@ -151,7 +160,8 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
                  << "\n";
     }
   };
-  InProcessRun run = RunInProcess(world, core_opts, seed, max_time, record, faults.any() ? &faults : nullptr);
+  InProcessRun run = RunInProcess(world, core_opts, seed, max_time, record, faults.any() ? &faults : nullptr,
+                                  tick_clock == "cpu" ? robot::WorkClockNs(ThreadCpuNs) : robot::WorkClockNs());
   if (!run.error.empty()) {
     std::fprintf(stderr, "irslam-sim: cannot start the mission: %s\n", run.error.c_str());
     return 1;
@@ -189,6 +199,22 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
                "min clearance %.3f m\n",
                status["state"].get<std::string>().c_str(), t, core.slam().distance_m(),
                static_cast<unsigned long long>(sim.collisions()), sim.min_clearance());
+  {
+    // The control loop's work per period (issue 15), this process's clock.
+    const auto& w = run.profile.work();
+    const auto& worst = run.profile.worst();
+    std::fprintf(stderr,
+                 "irslam-sim: work per period p50 %.3f ms, p99 %.3f ms, p99.9 %.3f ms, max %.3f ms "
+                 "(at %.2f s, mostly %s: slam %.3f, mission %.3f, planning %.3f ms); %.0fx real time\n",
+                 w.Quantile(0.5) * 1e-6, w.Quantile(0.99) * 1e-6, w.Quantile(0.999) * 1e-6, w.max() * 1e-6,
+                 run.profile.worst_t(), robot::ToString(run.profile.worst_phase()),
+                 worst[robot::TickPhase::kSlam] * 1e-6, worst[robot::TickPhase::kMission] * 1e-6,
+                 worst[robot::TickPhase::kPlanning] * 1e-6, run.wall_s > 0 ? t / run.wall_s : 0.0);
+    std::fprintf(stderr, "irslam-sim: largest per phase: slam %.3f ms, mission %.3f ms, planning %.3f ms\n",
+                 run.profile.phase_max(robot::TickPhase::kSlam) * 1e-6,
+                 run.profile.phase_max(robot::TickPhase::kMission) * 1e-6,
+                 run.profile.phase_max(robot::TickPhase::kPlanning) * 1e-6);
+  }
   if (run.faults) {
     std::fprintf(stderr, "irslam-sim: injected %s; irslamd's frame counters: %s\n",
                  FaultsJson(run.faults->counters()).dump().c_str(), status["frames"].dump().c_str());
@@ -337,6 +363,11 @@ int main(int argc, char** argv) {
   run->add_option("--events-out", events_out,
                   "Record every change of mission state, reason or behaviour with the true and "
                   "estimated pose (JSON lines)");
+  std::string tick_clock = "wall";
+  run->add_option("--tick-clock", tick_clock,
+                  "What the work per control period is measured in: wall (the monotonic clock) or cpu "
+                  "(this thread's CPU time: without the time a loaded host gave to others)")
+      ->check(CLI::IsMember({"wall", "cpu"}));
 
   auto* serve = app.add_subcommand("serve", "Be the motor controller on a CAN bus");
   add_common(serve);
@@ -357,6 +388,6 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
   if (*generate) return irslam::sim::Generate(gen_seed, profile, gen_out);
-  if (*run) return irslam::sim::Run(common, max_time, map_out, svg_out, lines_out, events_out);
+  if (*run) return irslam::sim::Run(common, max_time, map_out, svg_out, lines_out, events_out, tick_clock);
   return irslam::sim::Serve(common, iface, time_scale);
 }

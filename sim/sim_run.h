@@ -8,6 +8,7 @@
 #include <string>
 
 #include "robot/robot_core.h"
+#include "robot/tick_profile.h"
 #include "sim/faults.h"
 #include "sim/sim_controller.h"
 
@@ -21,14 +22,21 @@ struct InProcessRun {
   std::unique_ptr<FaultInjector> faults;  // when faults were injected
   double t = 0;
   std::string error;  // set when the mission could not start
+  // Each control period's work (the frames since the last period, then the
+  // tick; planning apart), measured on this process's monotonic clock; and the
+  // whole run's wall time (simulator included).
+  robot::TickProfile profile;
+  double wall_s = 0;
 };
 
 // Runs until the mission is done or idle again, or max_time_s of robot time.
-// on_tick (optional) is called after every control period.
+// on_tick (optional) is called after every control period. work_clock: what
+// the work per period (run.profile) is measured with (default: the monotonic clock).
 InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options, uint64_t seed,
                           double max_time_s,
                           const std::function<void(const InProcessRun&)>& on_tick = nullptr,
-                          const FaultSpec* faults = nullptr);
+                          const FaultSpec* faults = nullptr,
+                          robot::WorkClockNs work_clock = nullptr);
 
 }  // namespace irslam::sim
 

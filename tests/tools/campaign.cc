@@ -115,7 +115,7 @@ RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::Core
       at_loop = r.core->slam().calibration();
     }
   };
-  sim::InProcessRun run = sim::RunInProcess(world, options, seed, max_time_s, on_tick);
+  sim::InProcessRun run = sim::RunInProcess(world, options, seed, max_time_s, on_tick, nullptr, metrics::ThreadCpuNs);
   {
     const slam::CalibrationEstimate c = at_loop ? *at_loop : run.core->slam().calibration();
     const double truth = (1 + world.noise.wheel_radius_error_right) / (1 + world.noise.wheel_radius_error_left);
@@ -125,6 +125,10 @@ RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::Core
   s.done = run.core->state() == control::MissionState::kDone;
   s.end_state = control::ToString(run.core->state());
   s.robot_time_s = run.t;
+  s.tick_p99_ms = static_cast<double>(run.profile.work().Quantile(0.99)) * 1e-6;
+  s.tick_max_ms = static_cast<double>(run.profile.work().max()) * 1e-6;
+  s.tick_phase = robot::ToString(run.profile.worst_phase());
+  s.x_realtime = run.wall_s > 0 ? run.t / run.wall_s : 0;
   const nlohmann::json truth = run.sim->Truth();
   const auto est = metrics::ToWorld(run.core->slam().trajectory(), world.start);
   const auto errors = metrics::ComparePoses(est, FromJson(truth["trajectory"]));
@@ -320,6 +324,26 @@ std::string RobustnessReport(const std::vector<std::vector<RunScore>>& by_profil
         "150 s about 0.19 % per wheel, 0.27 % on the ratio. Over that loop it is indistinguishable from a "
         "radius error, so no estimate of a constant ratio can be within 0.1 % in 95 % of these runs (the "
         "median error above is of that size); with the nominal profile's white slip it is.\n\n";
+  // The control loop's work per period (issue 15): the ten runs with the largest period.
+  md << "## Control-loop work per period\n\n"
+        "Each control period's work (the frames since the last period, then the tick), in the run's thread CPU "
+        "time (`--jobs` runs at once; the real-time factor counts the host's load, the periods do not). Per profile the "
+        "largest period over all runs and the runs with the largest ones; *phase*: what took most of that "
+        "period.\n\n"
+        "| profile | seed | world | robot time s | tick p99 ms | tick max ms | phase | x real time |\n"
+        "|---|---|---|---|---|---|---|---|\n";
+  for (const auto& runs : by_profile) {
+    std::vector<const RunScore*> order;
+    for (const auto& s : runs) order.push_back(&s);
+    std::sort(order.begin(), order.end(), [](const RunScore* a, const RunScore* b) { return a->tick_max_ms > b->tick_max_ms; });
+    for (size_t i = 0; i < order.size() && i < 10; ++i) {
+      const RunScore& s = *order[i];
+      md << "| " << sim::ToString(s.profile) << " | " << s.seed << " | " << s.world << " | " << F(s.robot_time_s)
+         << " | " << F(s.tick_p99_ms, 3) << " | " << F(s.tick_max_ms, 3) << " | " << s.tick_phase << " | "
+         << F(s.x_realtime, 0) << " |\n";
+    }
+  }
+  md << "\n";
   md << "## Every failing run, and how to reproduce it\n\n"
      << "| profile | seed | world | end | robot time s | pieces good/complete/all | final cm | max cm | contacts "
         "(furniture/clutter) | failures | reproduce |\n|---|---|---|---|---|---|---|---|---|---|---|\n";

@@ -36,6 +36,10 @@ struct RunScore {
   // run when that never happened (ratio_at_loop false).
   double ratio_error = 0;
   bool ratio_at_loop = false;
+  // The control loop's work per period (issue 15), this host's clock (ms).
+  double tick_p99_ms = 0, tick_max_ms = 0;
+  std::string tick_phase;        // what took the largest period
+  double x_realtime = 0;         // robot time / wall time of the run
   std::vector<std::string> failures;  // the failure classes of this run (empty: a good run)
 };
 

@@ -6,6 +6,8 @@
 #ifndef IRSLAM_TESTS_TOOLS_METRICS_H_
 #define IRSLAM_TESTS_TOOLS_METRICS_H_
 
+#include <cstdint>
+#include <ctime>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -14,6 +16,14 @@
 #include "sim/world.h"
 
 namespace irslam::metrics {
+
+// This thread's CPU time (ns): the work per control period measured without
+// what the other processes of a loaded host took (sim::RunInProcess's clock).
+inline int64_t ThreadCpuNs() {
+  timespec ts{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
 
 struct PoseErrors {
   double final_position_m = 0;

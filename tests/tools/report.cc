@@ -2,6 +2,7 @@
 // and its SVG figures). Runs every world in process with several seeds.
 //   irslam-report [--worlds DIR] [--seeds N] [--out DIR]
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -36,6 +37,30 @@ struct Run {
   // Covariance over time: (t, robot heading sigma), (t, mean line sigma theta), (t, mean line sigma rho)
   std::vector<std::pair<double, double>> pose_sigma, line_sigma_theta, line_sigma_rho;
 };
+
+// The control loop's work per period over a world's runs (issue 15): the worst
+// run's quantiles, the largest period and the phase that took it, the slowest run.
+struct TickRow {
+  int runs = 0;
+  double robot_s = 0;
+  int64_t p99 = 0, p999 = 0, max = 0;
+  std::string phase;
+  double slowest_x = 0;  // robot time / wall time of the slowest run
+};
+
+void AddTicks(TickRow* row, const sim::InProcessRun& run) {
+  const auto& w = run.profile.work();
+  ++row->runs;
+  row->robot_s += run.t;
+  row->p99 = std::max(row->p99, w.Quantile(0.99));
+  row->p999 = std::max(row->p999, w.Quantile(0.999));
+  if (w.max() >= row->max) {
+    row->max = w.max();
+    row->phase = robot::ToString(run.profile.worst_phase());
+  }
+  const double x = run.wall_s > 0 ? run.t / run.wall_s : 0;
+  if (row->runs == 1 || x < row->slowest_x) row->slowest_x = x;
+}
 
 std::vector<TimedPose> FromJson(const nlohmann::json& arr) {
   std::vector<TimedPose> out;
@@ -199,6 +224,7 @@ int main(int argc, char** argv) {
         "fits the mapped lines to the true ones - the map frame is defined by the first wall, so this is the "
         "geometry of the map itself.\n\n";
 
+  std::map<std::string, TickRow> tick_rows;  // the whole missions' periods, by world
   // ---- One loop of every scenario.
   md << "## One wall-following loop per scenario\n\n"
      << "| world | seed | done | robot time s | collisions | SLAM final pos | SLAM final hdg | SLAM RMS pos | "
@@ -251,7 +277,9 @@ int main(int argc, char** argv) {
     for (const std::string name : {"fig14", "fig16", "fig19", "fig20"}) {
       const sim::World world = load(name);
       for (int s = 1; s <= seeds; ++s) {
-        sim::InProcessRun run = sim::RunInProcess(world, with_exploration, static_cast<uint64_t>(s), 900);
+        sim::InProcessRun run = sim::RunInProcess(world, with_exploration, static_cast<uint64_t>(s), 900, nullptr,
+                                                  nullptr, metrics::ThreadCpuNs);
+        AddTicks(&tick_rows[name], run);
         const metrics::ObjectScores sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world, 0);
         md << "| " << name << " | " << s << " | " << (run.core->state() == control::MissionState::kDone ? "yes" : "**no**")
            << " | " << F(run.t) << " | " << run.sim->collisions() << " | " << sc.pieces << " | " << sc.found
@@ -425,6 +453,28 @@ int main(int argc, char** argv) {
     Write(out_dir + "/fig18_loops.svg", LineChart("Fig. 18: five loops, position error (seed 1)",
                                                   "robot time [s]", "position error [cm]", {slam, odo}));
     md << "![five loops](fig18_loops.svg)\n";
+  }
+  // ---- The control loop's work per period (issue 15). Wall-clock numbers: they
+  // differ from run to run and with the host's load (benchmarks, not accuracy).
+  if (!tick_rows.empty()) {
+    const sim::World large = load("large_room");
+    for (int s = 1; s <= seeds; ++s) {
+      AddTicks(&tick_rows["large_room"], sim::RunInProcess(large, with_exploration, static_cast<uint64_t>(s), 900,
+                                                           nullptr, nullptr, metrics::ThreadCpuNs));
+    }
+    const auto ms = [](int64_t ns) { return F(static_cast<double>(ns) * 1e-6, 3); };
+    md << "\n## Control-loop work per period (issue 15)\n\n"
+          "The whole missions above (and an 8 x 6 m room, tests/worlds/large_room.json) in process: each "
+          "control period's work (the frames since the last period, then the tick) in the thread's CPU time "
+          "(what the other processes of a loaded host take does not count; the real-time factor does count "
+          "it), so these numbers change a little from run to run (docs/benchmarks.md has measured ones). Worst run of each world; *phase*: what took most of the largest period. Targets: largest "
+          "<= 2 ms, p99.9 <= 1 ms, every mission >= 500x real time.\n\n"
+       << "| world | runs | robot time s | p99 ms | p99.9 ms | max ms | phase | slowest x real time |\n"
+       << "|---|---|---|---|---|---|---|---|\n";
+    for (const auto& [name, r] : tick_rows) {
+      md << "| " << name << " | " << r.runs << " | " << F(r.robot_s) << " | " << ms(r.p99) << " | " << ms(r.p999)
+         << " | " << ms(r.max) << " | " << r.phase << " | " << F(r.slowest_x, 0) << " |\n";
+    }
   }
   if (!Write(out_dir + "/accuracy.md", md.str())) {
     std::fprintf(stderr, "irslam-report: cannot write %s/accuracy.md\n", out_dir.c_str());

@@ -77,6 +77,8 @@ class DaemonMissionTest : public ::testing::Test {
     self.groups = {::getgid()};
     nlohmann::json reply;
     daemon_->Handle(r, self, [&reply](nlohmann::json j) { reply = std::move(j); });
+    // A stop's reply waits for the map writer thread's outcome, posted onto io_.
+    while (reply.is_null()) io_.run_one();
     return reply;
   }
   size_t MapLines() { return Call("map")["result"]["lines"].size(); }
@@ -207,6 +209,135 @@ TEST_F(DaemonMissionTest, AFailedSaveMakesStopAnErrorAndShutdownNonZero) {
   EXPECT_EQ(daemon_->Shutdown(), 1);
   const std::string log = ::testing::internal::GetCapturedStderr();
   EXPECT_NE(log.find("the final map save failed: exit status 1"), std::string::npos) << log;
+}
+
+// Issue 15: the map is written on the writer thread. The stop's reply waits for
+// the outcome, the control loop does not: Handle returns at once with the
+// snapshot handed over, ticks go on, and the reply comes when the writer's
+// outcome is delivered on the loop.
+TEST_F(DaemonMissionTest, StopHandsTheMapToTheWriterAndRepliesWhenItIsWritten) {
+  Open();
+  Run(1);
+  ASSERT_TRUE(Call("start").contains("result"));
+  Run(15);
+  rpc::Request r;
+  r.id = 9;
+  r.method = "stop";
+  PeerCred self;
+  self.uid = ::getuid();
+  self.gid = ::getgid();
+  nlohmann::json reply;
+  daemon_->Handle(r, self, [&reply](nlohmann::json j) { reply = std::move(j); });
+  EXPECT_TRUE(reply.is_null());  // not answered yet: the file is being written
+  EXPECT_TRUE(daemon_->maps().writing());
+  auto s = daemon_->StatusJson()["map_store"];
+  EXPECT_EQ(s["writing"], true);
+  EXPECT_EQ(s["last_result"], "queued");
+  EXPECT_EQ(s["saves"], 0);
+  daemon_->Tick();  // the loop goes on meanwhile
+  EXPECT_EQ(daemon_->StatusJson()["state"], "idle");
+  while (reply.is_null()) io_.run_one();
+  ASSERT_TRUE(reply.contains("result")) << reply;
+  EXPECT_EQ(reply["id"], 9);
+  EXPECT_EQ(reply["result"]["map"], "saved");
+  s = daemon_->StatusJson()["map_store"];
+  EXPECT_EQ(s["writing"], false);
+  EXPECT_EQ(s["saves"], 1);
+  EXPECT_EQ(s["seq"], 1);
+  EXPECT_EQ(s["last_result"], "saved");
+  std::string error;
+  auto saved = MapStore(core_.state_dir).Load(&error);
+  ASSERT_TRUE(saved) << error;
+  EXPECT_EQ(saved->reason, "stop");
+  EXPECT_EQ(saved->map["lines"].size(), MapLines());
+  // A second stop with the same map: nothing to write, answered at once.
+  EXPECT_EQ(Call("stop")["result"]["map"], "unchanged");
+  EXPECT_EQ(daemon_->Shutdown(), 0);
+}
+
+// SIGTERM while a write is in flight: the shutdown waits for it (and answers the
+// stop waiting for it), then writes the final map itself.
+TEST_F(DaemonMissionTest, ShutdownWaitsForTheWriteInFlightAndAnswersTheWaitingStop) {
+  Open();
+  Run(1);
+  ASSERT_TRUE(Call("start").contains("result"));
+  Run(12);
+  rpc::Request r;
+  r.id = 3;
+  r.method = "stop";
+  PeerCred self;
+  self.uid = ::getuid();
+  self.gid = ::getgid();
+  nlohmann::json reply;
+  daemon_->Handle(r, self, [&reply](nlohmann::json j) { reply = std::move(j); });
+  ASSERT_TRUE(reply.is_null());
+  EXPECT_EQ(daemon_->Shutdown(), 0);
+  ASSERT_TRUE(reply.contains("result")) << reply;
+  EXPECT_EQ(reply["result"]["map"], "saved");
+  const auto s = daemon_->StatusJson()["map_store"];
+  EXPECT_EQ(s["saves"], 1);  // the final save found the same map: unchanged
+  EXPECT_EQ(s["writing"], false);
+}
+
+// Issue 15 (c): a 100 ms host stall tripped the 0.1 s encoder timeout. A loop
+// that was itself stalled, with the controller's frames queued unread, must not
+// blame the controller; 150 ms of true silence while the loop keeps its period
+// must still fault.
+TEST_F(DaemonMissionTest, ALoopStallWithFramesQueuedIsNoControllerLossButSilenceIs) {
+  Open();
+  Run(1);
+  ASSERT_TRUE(Call("start").contains("result"));
+  Run(2);
+  ASSERT_EQ(daemon_->StatusJson()["state"], "wall_follow");
+  // 150 ms in which the loop did not run; the controller went on sending.
+  for (int i = 0; i < 75; ++i) {
+    now_ += std::chrono::milliseconds(2);
+    t_ += 0.002;
+    std::vector<can_frame> out;
+    sim_->AdvanceTo(t_, &out);
+    for (const auto& f : out) controller_->Send(f);
+  }
+  sim_io_.poll();
+  sim_io_.restart();
+  daemon_->Tick();  // late, before the daemon has read what is queued
+  auto s = daemon_->StatusJson();
+  EXPECT_EQ(s["state"], "wall_follow") << s["reason"];
+  EXPECT_EQ(s["period"]["loop_stalls"], 1);
+  Run(0.2);
+  s = daemon_->StatusJson();
+  EXPECT_EQ(s["state"], "wall_follow") << s["reason"];
+  EXPECT_EQ(s["controller"]["alive"], true);
+  // 160 ms of silence, the loop on its period: the controller is lost.
+  for (int i = 0; i < 8; ++i) {
+    now_ += std::chrono::milliseconds(20);
+    Pump();
+    daemon_->Tick();
+  }
+  s = daemon_->StatusJson();
+  EXPECT_EQ(s["state"], "fault");
+  EXPECT_EQ(s["reason"], "controller lost: encoder frames timed out");
+  EXPECT_EQ(s["period"]["loop_stalls"], 1);
+}
+
+// The stall grace is one tick: a loop that stays slow (every tick late) with a
+// silent controller still faults, at the second late tick.
+TEST_F(DaemonMissionTest, AStallGraceLastsOneTickSoASlowLoopStillFindsADeadController) {
+  Open();
+  Run(1);
+  ASSERT_TRUE(Call("start").contains("result"));
+  Run(2);
+  ASSERT_EQ(daemon_->StatusJson()["state"], "wall_follow");
+  now_ += std::chrono::milliseconds(150);  // no frames: the controller is silent
+  Pump();
+  daemon_->Tick();
+  EXPECT_EQ(daemon_->StatusJson()["state"], "wall_follow");  // stalled: not judged
+  now_ += std::chrono::milliseconds(150);
+  Pump();
+  daemon_->Tick();  // late again, but the grace was had
+  const auto s = daemon_->StatusJson();
+  EXPECT_EQ(s["state"], "fault");
+  EXPECT_EQ(s["reason"], "controller lost: encoder frames timed out");
+  EXPECT_EQ(s["period"]["loop_stalls"], 1);
 }
 
 }  // namespace

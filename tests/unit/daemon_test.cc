@@ -97,6 +97,8 @@ class DaemonTest : public ::testing::Test {
     self.groups = {::getgid()};
     nlohmann::json reply;
     daemon_->Handle(r, self, [&reply](nlohmann::json j) { reply = std::move(j); });
+    // A stop's reply waits for the map writer thread's outcome, posted onto io_.
+    while (reply.is_null()) io_.run_one();
     return reply;
   }
 

@@ -104,3 +104,71 @@ TEST(GoToTest, AGoalWithoutHeadingStaysReached) {
 
 }  // namespace
 }  // namespace irslam::control
+
+namespace irslam::control {
+namespace {
+
+// Issue 15: blocked ahead with no path, the go-to replanned every period (a failed
+// search floods the whole grid). Now it retries after a back-off that doubles,
+// and looks around on the spot meanwhile.
+TEST(GoToTest, AFailedPlanWhileBlockedBacksOffAndLooksAround) {
+  Rig r;
+  GoToOptions o;
+  EXPECT_EQ(o.replan_backoff_s, 0);  // off by default
+  o.replan_backoff_s = 0.107;        // (off the 20 ms grid, so no retry falls on a tick)
+  ASSERT_EQ(o.replan_backoff_after, 10);
+  GoTo g(o, r.o.slam.geometry, r.o.slam.mounts);
+  ASSERT_TRUE(g.TryGoal({0.35, 0}, 0, true, r.slam, r.bumps));  // nothing seen yet: a path
+  EXPECT_EQ(g.planner_stats().plans, 1u);
+  g.Begin(0);
+  RangeScan scan;
+  scan.range_m[3] = 0.2;  // the front sensor (0 deg): something 0.25 m ahead, 0.1 m from the goal: no path
+  for (int i = 0; i < 50; ++i) {
+    const GoTo::Result res = g.Step(0.02 * i, r.slam, scan, 0, r.bumps, r.follower);
+    ASSERT_EQ(res.status, GoTo::Status::kDriving);
+    EXPECT_DOUBLE_EQ(res.twist.v, 0) << i;
+    EXPECT_DOUBLE_EQ(res.twist.omega, 2.5 * 0.3) << i;  // k_heading * look_around_factor
+  }
+  // Plans every period up to the 10th failure (0.18 s), then at 0.30, 0.52 and
+  // 0.96 s (back-off 0.107, 0.214, 0.428, then 0.856 s): 13 in a second, not 50.
+  EXPECT_EQ(g.planner_stats().plans, 14u);
+  EXPECT_EQ(g.planner_stats().failed, 13u);
+}
+
+// The planner keeps its grids between calls and answers a goal that the last
+// failed search could not reach at once, with the same answers as a fresh one.
+TEST(PathPlannerTest, ReusesItsGridsAndKnowsWhatTheLastFailedSearchCouldNotReach) {
+  PlannerOptions po;
+  po.inflation_m = 0.25;
+  po.hard_m = 0.19;
+  // A room 4 x 3 m with a closed box (1 x 1 m, its inside free) in the middle.
+  std::vector<Obstacle> obs = {{{0, 0}, {4, 0}}, {{4, 0}, {4, 3}}, {{4, 3}, {0, 3}}, {{0, 3}, {0, 0}},
+                               {{1.5, 1}, {2.5, 1}}, {{2.5, 1}, {2.5, 2}}, {{2.5, 2}, {1.5, 2}},
+                               {{1.5, 2}, {1.5, 1}}};
+  PathPlanner planner;
+  const Eigen::Vector2d start(0.5, 0.5);
+  EXPECT_FALSE(planner.Plan(obs, start, {2.0, 1.5}, po));  // inside the box: floods the room
+  EXPECT_EQ(planner.stats().searches, 1u);
+  const uint64_t pops = planner.stats().pops;
+  EXPECT_GT(pops, 2000u);
+  EXPECT_FALSE(planner.Plan(obs, start, {1.95, 1.55}, po));  // also inside: known at once
+  EXPECT_EQ(planner.stats().searches, 1u);
+  EXPECT_EQ(planner.stats().known_unreachable, 1u);
+  EXPECT_EQ(planner.stats().pops, pops);
+  EXPECT_EQ(planner.stats().clearance_reused, 1u);
+  const auto path = planner.Plan(obs, start, {3.5, 2.5}, po);
+  ASSERT_TRUE(path);
+  const auto fresh = PlanPath(obs, start, {3.5, 2.5}, po);
+  ASSERT_TRUE(fresh);
+  ASSERT_EQ(path->size(), fresh->size());
+  for (size_t i = 0; i < path->size(); ++i) EXPECT_EQ((*path)[i], (*fresh)[i]) << i;
+  EXPECT_EQ(planner.stats().searches, 2u);
+  EXPECT_EQ(planner.stats().clearance_reused, 2u);
+  // Another start: the failed search's answer no longer holds; a search again.
+  EXPECT_FALSE(planner.Plan(obs, {3.5, 0.5}, {2.0, 1.5}, po));
+  EXPECT_EQ(planner.stats().searches, 3u);
+  EXPECT_EQ(planner.stats().known_unreachable, 1u);
+}
+
+}  // namespace
+}  // namespace irslam::control
