@@ -1,3 +1,11 @@
+// Coverage planning (control/coverage.h) and the covered-floor grid. Over the
+// ~400-line bar of issue 10, kept as one file: its seam — one cell's geometry and
+// route (CoverageCell::Outline, SweepRoute and their helpers IntervalAt, Boundary,
+// Simplify, Mirrored: ~230 lines) against the plan (PlanOriented's decomposition
+// and tour, PlanCoverage, FreeRects) and CoverageGrid — leaves two halves that are
+// each read with the other (the route helpers walk exactly the slabs the
+// decomposition builds), and the option table accounts for ~45 of the lines. If
+// either half grows, that seam is where the file splits (coverage_route.cc).
 #include "control/coverage.h"
 
 #include <algorithm>
