@@ -4,6 +4,14 @@
 
 namespace irslam::control {
 
+options::Table<SafetyOptions> SafetyKeys() {
+  static constexpr options::Key<SafetyOptions> kKeys[] = {
+      {"debounce_s", &SafetyOptions::debounce_s, 0, 1, "s",
+       "a release counts once stable this long (presses act at once)"},
+  };
+  return kKeys;
+}
+
 void Debouncer::Input(bool active, double t) {
   if (active) {
     stable_ = true;

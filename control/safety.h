@@ -7,8 +7,16 @@
 #include <optional>
 
 #include "control/mission.h"
+#include "types/options.h"
 
 namespace irslam::control {
+
+// The safety inputs' own option (config key [gpio].debounce_s: it sits beside the
+// GPIO lines in the file, but the lines are the daemon's and this is the core's).
+struct SafetyOptions {
+  double debounce_s = 0.02;  // a release counts once the input stayed released this long
+};
+options::Table<SafetyOptions> SafetyKeys();  // [gpio].debounce_s
 
 // A switch input, debounced the safe way: an activation acts at once (an
 // emergency stop or a bump must not wait), a release only once the input has

@@ -13,7 +13,7 @@
 
 namespace irslam {
 
-BusRecorder::BusRecorder(std::string state_dir, robot::RecordSettings settings, RecordHeader header,
+BusRecorder::BusRecorder(std::string state_dir, RecordSettings settings, RecordHeader header,
                          std::string iface)
     : dir_(std::move(state_dir)),
       path_(dir_ + "/bus.log"),

@@ -21,7 +21,7 @@
 #include <thread>
 
 #include "daemon/candump_log.h"
-#include "robot/robot_core.h"
+#include "daemon/daemon_settings.h"
 
 namespace irslam {
 
@@ -37,7 +37,7 @@ struct RecorderStats {
 class BusRecorder {
  public:
   // iface: the name written on every line (candump's interface column).
-  BusRecorder(std::string state_dir, robot::RecordSettings settings, RecordHeader header, std::string iface);
+  BusRecorder(std::string state_dir, RecordSettings settings, RecordHeader header, std::string iface);
   ~BusRecorder();  // writes what is buffered, then stops the thread
   BusRecorder(const BusRecorder&) = delete;
   BusRecorder& operator=(const BusRecorder&) = delete;
@@ -61,7 +61,7 @@ class BusRecorder {
   bool WriteAll(const std::string& text, std::string* error);
 
   const std::string dir_, path_;
-  const robot::RecordSettings settings_;
+  const RecordSettings settings_;
   const RecordHeader header_;
   const std::string iface_;
   int fd_ = -1;  // writer thread only (after Open)

@@ -192,7 +192,7 @@ class Documenter : public config::Visitor {
 
 }  // namespace
 
-bool ParseConfig(std::string_view text, robot::CoreOptions* options, std::string* error) {
+bool ParseConfig(std::string_view text, DaemonSettings* settings, std::string* error) {
   error->clear();
   const std::optional<json> parsed = ParseJsonText(text, error);
   if (!parsed) {
@@ -203,43 +203,51 @@ bool ParseConfig(std::string_view text, robot::CoreOptions* options, std::string
     *error = "config: the top level must be an object";
     return false;
   }
-  robot::CoreOptions o = *options;
+  DaemonSettings s = *settings;
   Reader reader(*parsed, error);
-  config::WalkConfig(&o, &reader);
+  config::WalkConfig(&s, &reader);
   reader.Finish();
   if (error->empty()) {
-    const std::string check = config::CheckConfig(o);
+    const std::string check = config::CheckConfig(s);
     if (!check.empty()) *error = "config: " + check;
   }
   if (!error->empty()) return false;
-  *options = o;
+  *settings = s;
   return true;
 }
 
-bool LoadConfigFile(const std::string& path, robot::CoreOptions* options, std::string* error) {
+bool LoadConfigFile(const std::string& path, DaemonSettings* settings, std::string* error) {
   std::string text;
   if (!ReadRegularFile(path, kMaxConfigBytes, &text, error)) {
     *error = "config: " + *error;
     return false;
   }
-  if (!ParseConfig(text, options, error)) {
+  if (!ParseConfig(text, settings, error)) {
     *error = path + ": " + *error;
     return false;
   }
   return true;
 }
 
-std::string DumpConfig(const robot::CoreOptions& options) {
-  robot::CoreOptions o = options;
+bool LoadCoreConfigFile(const std::string& path, robot::CoreOptions* core, std::string* error) {
+  DaemonSettings s;
+  s.core = *core;
+  if (!LoadConfigFile(path, &s, error)) return false;
+  *core = s.core;
+  return true;
+}
+
+std::string DumpConfig(const DaemonSettings& settings) {
+  DaemonSettings s = settings;
   Dumper dumper;
-  config::WalkConfig(&o, &dumper);
+  config::WalkConfig(&s, &dumper);
   return dumper.Take().dump(2);
 }
 
-std::string DocumentedConfig(const robot::CoreOptions& options) {
-  robot::CoreOptions o = options;
+std::string DocumentedConfig(const DaemonSettings& settings) {
+  DaemonSettings s = settings;
   Documenter doc;
-  config::WalkConfig(&o, &doc);
+  config::WalkConfig(&s, &doc);
   return doc.Take();
 }
 

@@ -25,16 +25,17 @@ options::Table<robot::CoreOptions> HeartbeatKeys() {
   return kKeys;
 }
 
-options::Table<robot::CoreOptions> StateKeys() {
-  static constexpr options::Key<robot::CoreOptions> kKeys[] = {
-      {"dir", &robot::CoreOptions::state_dir, 0, 0, "",
+// The daemon's own settings.
+options::Table<DaemonSettings> StateKeys() {
+  static constexpr options::Key<DaemonSettings> kKeys[] = {
+      {"dir", &DaemonSettings::state_dir, 0, 0, "",
        "the map is saved here (map.json; systemd StateDirectory=irslam)"},
   };
   return kKeys;
 }
 
-options::Table<robot::ApiSettings> ApiKeys() {
-  using A = robot::ApiSettings;
+options::Table<ApiSettings> ApiKeys() {
+  using A = ApiSettings;
   static constexpr options::Key<A> kKeys[] = {
       {"socket_group", &A::socket_group, 0, 0, "", "chgrp the socket to this group (\"\": the daemon's group)"},
       {"read_group", &A::read_group, 0, 0, "", "may call status/map/subscribe (\"\": anyone who can connect)"},
@@ -49,22 +50,14 @@ options::Table<robot::ApiSettings> ApiKeys() {
   return kKeys;
 }
 
-options::Table<robot::RecordSettings> RecordKeys() {
-  using R = robot::RecordSettings;
+options::Table<RecordSettings> RecordKeys() {
+  using R = RecordSettings;
   static constexpr options::Key<R> kKeys[] = {
       {"enabled", &R::enabled, 0, 0, "", "record the bus to STATE_DIR/bus.log (candump -L; irslam-replay)"},
       {"max_bytes", &R::max_bytes, 65536, 2147483647, "bytes", "a log file is rotated at this size"},
       {"files", &R::files, 1, 100, "", "files kept: bus.log and bus.log.1 .. bus.log.(files-1)"},
       {"buffer_bytes", &R::buffer_bytes, 4096, 64 * 1024 * 1024, "bytes",
        "lines waiting for the writer at most (more are dropped and counted)"},
-  };
-  return kKeys;
-}
-
-options::Table<drivers::GpioSettings> GpioKeys() {
-  static constexpr options::Key<drivers::GpioSettings> kKeys[] = {
-      {"debounce_s", &drivers::GpioSettings::debounce_s, 0, 1, "s",
-       "a release counts once stable this long (presses act at once)"},
   };
   return kKeys;
 }
@@ -126,11 +119,12 @@ json DumpGpioLine(const drivers::GpioLineSpec& l) {
   return {{"chip", l.chip}, {"line", l.line}, {"active_low", l.active_low}};
 }
 
-void WalkGpio(robot::CoreOptions* o, Visitor* v) {
+// [gpio]: the lines are the daemon's, the debounce time the core's.
+void WalkGpio(DaemonSettings* s, Visitor* v) {
   v->Section("gpio", "optional safety lines (libgpiod; docs/gpio.md). Each line: \"chip\" = label, name "
                      "(gpiochip0), path or number (\"\": not fitted), \"line\" = line name or offset, "
                      "\"active_low\" = pressed/on is the low level");
-  auto& g = o->gpio;
+  auto& g = s->gpio;
   const struct {
     std::string_view name, doc;
     drivers::GpioLineSpec* line;
@@ -144,7 +138,7 @@ void WalkGpio(robot::CoreOptions* o, Visitor* v) {
     v->Custom({l.name, l.doc, [spec](const json& j) { return ReadGpioLine(j, spec); },
                [spec] { return DumpGpioLine(*spec); }});
   }
-  v->Keys(&g, GpioKeys());
+  v->Keys(&s->core.safety, control::SafetyKeys());
   v->End();
 }
 
@@ -191,17 +185,19 @@ void WalkSlam(robot::CoreOptions* o, Visitor* v) {
 
 }  // namespace
 
-void WalkConfig(robot::CoreOptions* o, Visitor* v) {
+void WalkConfig(DaemonSettings* s, Visitor* v) {
   v->Section("api", "the control socket (irslamd only)");
-  v->Keys(&o->api, ApiKeys());
+  v->Keys(&s->api, ApiKeys());
   v->End();
   v->Section("state", "");
-  v->Keys(o, StateKeys());
+  v->Keys(s, StateKeys());
   v->End();
   v->Section("record", "the daemon's own bus recording (irslamd only; applies at restart)");
-  v->Keys(&o->record, RecordKeys());
+  v->Keys(&s->record, RecordKeys());
   v->End();
-  WalkGpio(o, v);
+  WalkGpio(s, v);
+  // The core's sections.
+  robot::CoreOptions* o = &s->core;
   v->Section("robot", "");
   v->Keys(&o->slam.geometry, RobotGeometryKeys());
   v->End();
@@ -236,8 +232,9 @@ void WalkConfig(robot::CoreOptions* o, Visitor* v) {
   WalkSlam(o, v);
 }
 
-std::string CheckConfig(const robot::CoreOptions& o) {
-  if (o.state_dir.empty()) return "state.dir must not be empty";
+std::string CheckConfig(const DaemonSettings& s) {
+  if (s.state_dir.empty()) return "state.dir must not be empty";
+  const robot::CoreOptions& o = s.core;
   if (o.mission.mode != "explore" && o.mission.mode != "clean")
     return "mission.mode must be \"explore\" or \"clean\" (got \"" + o.mission.mode + "\")";
   const std::string ir = o.ir.Validate();

@@ -13,7 +13,7 @@
 #include <string_view>
 
 #include "io/option_json.h"
-#include "robot/robot_core.h"
+#include "daemon/daemon_settings.h"
 #include "types/options.h"
 
 namespace irslam::config {
@@ -43,11 +43,12 @@ class Visitor {
   }
 };
 
-// Walks every section of the file over o (the visitor may read or write o).
-void WalkConfig(robot::CoreOptions* o, Visitor* v);
+// Walks every section of the file over s: the daemon's own sections bound to s,
+// the core's to s->core (the visitor may read or write s).
+void WalkConfig(DaemonSettings* s, Visitor* v);
 
 // Checks that span keys (e.g. the IR table against its ranges): "" or one line.
-std::string CheckConfig(const robot::CoreOptions& o);
+std::string CheckConfig(const DaemonSettings& s);
 
 }  // namespace irslam::config
 

@@ -34,7 +34,7 @@ nlohmann::json Daemon::Start(const rpc::Request& req) {
   }
   // contracts §7: optional {"mode": "explore"|"clean", "fresh": bool}. fresh
   // (forget the saved map) is accepted: every start explores from nothing today.
-  std::string mode = core_options_.mission.mode;
+  std::string mode = settings_.core.mission.mode;
   if (req.params.is_object()) {
     for (const auto& [k, v] : req.params.items()) {
       if (k == "mode") {

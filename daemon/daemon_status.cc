@@ -57,7 +57,7 @@ nlohmann::json Daemon::StatusJson() {
   nlohmann::json s = ToJson(core_->Status(now));
   s["uptime"] = WallNow();
   s["time_scale"] = options_.time_scale;
-  s["period"] = {{"target", core_options_.period_s},
+  s["period"] = {{"target", settings_.core.period_s},
                  {"ticks", scheduler_.ticks()},
                  {"overruns", scheduler_.overruns()},
                  {"jitter_mean", scheduler_.mean_late_ns() * 1e-9},

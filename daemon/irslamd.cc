@@ -23,19 +23,19 @@ int64_t Daemon::Ns(WallTime t) {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
 }
 
-Daemon::Daemon(boost::asio::io_context& io, DaemonOptions options, robot::CoreOptions core, WallClock clock)
+Daemon::Daemon(boost::asio::io_context& io, DaemonOptions options, DaemonSettings settings, WallClock clock)
     : io_(io),
       options_(std::move(options)),
-      core_options_(core),
+      settings_(std::move(settings)),
       clock_(std::move(clock)),
       start_(clock_()),
-      core_(std::make_unique<robot::RobotCore>(core)),
+      core_(std::make_unique<robot::RobotCore>(settings_.core)),
       timer_(io),
       signals_(io, SIGINT, SIGTERM, SIGHUP),
-      scheduler_(PeriodNs(core, options_.time_scale), Ns(start_)),
+      scheduler_(PeriodNs(settings_.core, options_.time_scale), Ns(start_)),
       notifier_(options_.notify_socket),
       watchdog_(options_.watchdog_usec),
-      maps_(core.state_dir, clock_, MapService::kDefaultMinIntervalS, &io),
+      maps_(settings_.state_dir, clock_, MapService::kDefaultMinIntervalS, &io),
       methods_(MakeMethods()) {
   maps_.set_written([this](SaveResult r) { OnMapWritten(r); });
   core_->SetWorkClock([this] { return Ns(clock_()); });
@@ -56,14 +56,14 @@ bool Daemon::Open(std::string* error) {
   // has reached the core yet, so it is simply made again with it).
   if (maps_.stored()) {
     if (const auto c = CalibrationFromMap(maps_.stored()->map)) {
-      core_options_.slam.initial_calibration = c;
-      core_ = std::make_unique<robot::RobotCore>(core_options_);
+      settings_.core.slam.initial_calibration = c;
+      core_ = std::make_unique<robot::RobotCore>(settings_.core);
       std::fprintf(stderr, "<6>irslamd: odometry calibration from the saved map: wheel radius scale %.5f/%.5f, "
                    "track width scale %.5f\n", c->value.left, c->value.right, c->value.base);
     }
   }
   // A configured safety line that cannot be had is an error, never ignored.
-  gpio_ = drivers::Gpio::Open(io_, core_options_.gpio, error);
+  gpio_ = drivers::Gpio::Open(io_, settings_.gpio, error);
   if (!gpio_) return false;
   if (!OpenAccess(error)) return false;
   api_ = std::make_unique<ApiServer>(io_, options_.socket_path, options_.limits, this);
@@ -74,7 +74,7 @@ bool Daemon::Open(std::string* error) {
 }
 
 bool Daemon::OpenAccess(std::string* error) {
-  const auto& a = core_options_.api;
+  const auto& a = settings_.api;
   access_.daemon_uid = ::getuid();
   const std::pair<const std::string*, std::optional<gid_t>*> groups[] = {
       {&a.socket_group, &socket_gid_}, {&a.read_group, &access_.read_gid}, {&a.control_group, &access_.control_gid}};
@@ -93,14 +93,14 @@ void Daemon::SendFrame(const can_frame& f, double now) {
 }
 
 void Daemon::OpenRecorder() {
-  if (!core_options_.record.enabled || !bus_) return;
+  if (!settings_.record.enabled || !bus_) return;
   timespec ts{};
   ::clock_gettime(CLOCK_REALTIME, &ts);
   // The origin on a whole microsecond: every stamp is then origin + whole microseconds.
   const RecordHeader header{static_cast<int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec / 1000 * 1000,
-                            options_.time_scale, core_options_.period_s};
+                            options_.time_scale, settings_.core.period_s};
   const std::string iface = options_.can_iface.rfind("unix:", 0) == 0 ? "loopback" : options_.can_iface;
-  recorder_ = std::make_unique<BusRecorder>(core_options_.state_dir, core_options_.record, header, iface);
+  recorder_ = std::make_unique<BusRecorder>(settings_.state_dir, settings_.record, header, iface);
   std::string error;
   if (!recorder_->Open(&error)) {
     std::fprintf(stderr, "<3>irslamd: record: %s: not recording\n", error.c_str());
@@ -160,7 +160,7 @@ int Daemon::Run() {
   OpenRecorder();
   ArmTimer();
   std::fprintf(stderr, "<6>irslamd: ready can=%s socket=%s period=%.3fs time_scale=%g\n", bus_->name().c_str(),
-               options_.socket_path.c_str(), core_options_.period_s, options_.time_scale);
+               options_.socket_path.c_str(), settings_.core.period_s, options_.time_scale);
   notifier_.Send("READY=1\nSTATUS=state=idle");
   io_.run();
   return exit_status_;
@@ -263,7 +263,7 @@ void Daemon::Reload() {
     std::fprintf(stderr, "<5>irslamd: SIGHUP: no --config file, nothing to reload\n");
     return;
   }
-  robot::CoreOptions fresh = robot::DefaultCoreOptions();
+  DaemonSettings fresh;  // the built-in defaults
   std::string error;
   if (!LoadConfigFile(options_.config_path, &fresh, &error)) {
     std::fprintf(stderr, "<3>irslamd: reload failed, keeping the running config: %s\n", error.c_str());
@@ -289,25 +289,24 @@ void Daemon::ApplyPendingOptions() {
   std::fprintf(stderr, "<5>irslamd: config from %s applied\n", options_.config_path.c_str());
 }
 
-void Daemon::ApplyOptions(robot::CoreOptions fresh) {
-  if (!fresh.gpio.SameLines(core_options_.gpio)) {
+void Daemon::ApplyOptions(DaemonSettings fresh) {
+  // (The debounce time, fresh.core.safety, applies at once with the new core.)
+  if (!fresh.gpio.SameLines(settings_.gpio)) {
     std::fprintf(stderr, "<4>irslamd: [gpio] lines are opened at start: the change applies after a restart\n");
-    const double debounce_s = fresh.gpio.debounce_s;  // this applies at once
-    fresh.gpio = core_options_.gpio;
-    fresh.gpio.debounce_s = debounce_s;
+    fresh.gpio = settings_.gpio;
   }
   // The odometry calibration carries over: what the old core learnt if a mission
   // ran on it, else what it started from.
-  fresh.slam.initial_calibration = maps_.has_live_map() && core_options_.slam.calibration.enabled
-                                       ? std::optional(core_->slam().calibration())
-                                       : core_options_.slam.initial_calibration;
+  fresh.core.slam.initial_calibration = maps_.has_live_map() && settings_.core.slam.calibration.enabled
+                                            ? std::optional(core_->slam().calibration())
+                                            : settings_.core.slam.initial_calibration;
   maps_.OnCoreReplaced(LiveMap());  // the old core's map is kept (and saved if it was not)
-  core_options_ = fresh;
-  core_ = std::make_unique<robot::RobotCore>(fresh);
+  settings_ = fresh;
+  core_ = std::make_unique<robot::RobotCore>(fresh.core);
   core_->SetWorkClock([this] { return Ns(clock_()); });
   if (foreign_.Present(WallNow())) core_->LatchFault(RobotNow(), kForeignCommanderReason);
   if (gpio_) gpio_->Replay();  // the new core learns the inputs' present levels
-  scheduler_ = PeriodScheduler(PeriodNs(fresh, options_.time_scale), Ns(clock_()));
+  scheduler_ = PeriodScheduler(PeriodNs(fresh.core, options_.time_scale), Ns(clock_()));
 }
 
 bool Daemon::MaySubscribe(const PeerCred& peer) {

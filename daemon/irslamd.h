@@ -23,6 +23,7 @@
 #include "daemon/api_server.h"
 #include "daemon/bus_recorder.h"
 #include "daemon/core_json.h"
+#include "daemon/daemon_settings.h"
 #include "daemon/foreign_commander.h"
 #include "daemon/map_service.h"
 #include "daemon/period_scheduler.h"
@@ -34,6 +35,7 @@
 
 namespace irslam {
 
+// The command line's and systemd's part (the config file's is DaemonSettings).
 struct DaemonOptions {
   std::string can_iface;
   std::string socket_path = "/run/irslam/irslamd.sock";
@@ -49,7 +51,7 @@ struct DaemonOptions {
 
 class Daemon : public ApiServer::Dispatcher {
  public:
-  Daemon(boost::asio::io_context& io, DaemonOptions options, robot::CoreOptions core,
+  Daemon(boost::asio::io_context& io, DaemonOptions options, DaemonSettings settings,
          WallClock clock = SystemWallClock());
   ~Daemon() override;
   Daemon(const Daemon&) = delete;
@@ -77,7 +79,8 @@ class Daemon : public ApiServer::Dispatcher {
   nlohmann::json StatusJson();
   const robot::TickProfile& tick_profile() const { return profile_; }
   const RpcMethodTable& methods() const { return methods_; }
-  const robot::CoreOptions& core_options() const { return core_options_; }
+  const DaemonSettings& settings() const { return settings_; }
+  const robot::CoreOptions& core_options() const { return settings_.core; }
   const MapService& maps() const { return maps_; }
 
  private:
@@ -104,8 +107,8 @@ class Daemon : public ApiServer::Dispatcher {
   void SendFrame(const can_frame& f, double now);
   void OpenRecorder();
   void OnStateChange(double now);
-  // A new core with these options; the map service keeps the old core's map.
-  void ApplyOptions(robot::CoreOptions fresh);
+  // A new core with these settings; the map service keeps the old core's map.
+  void ApplyOptions(DaemonSettings fresh);
   void ApplyPendingOptions();
   void OnGpioInput(drivers::Gpio::Input input, bool active);
   // Drives the GPIO outputs (motor enable, LED) from the core's state.
@@ -114,8 +117,8 @@ class Daemon : public ApiServer::Dispatcher {
 
   boost::asio::io_context& io_;
   DaemonOptions options_;
-  robot::CoreOptions core_options_;
-  std::optional<robot::CoreOptions> pending_options_;
+  DaemonSettings settings_;  // the config file's (the core runs on settings_.core)
+  std::optional<DaemonSettings> pending_options_;
   WallClock clock_;
   WallTime start_;
   std::unique_ptr<robot::RobotCore> core_;

@@ -38,23 +38,23 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-  irslam::robot::CoreOptions core = irslam::robot::DefaultCoreOptions();
+  irslam::DaemonSettings settings;  // the built-in defaults, then the config file's
   std::string error;
-  if (!options.config_path.empty() && !irslam::LoadConfigFile(options.config_path, &core, &error)) {
+  if (!options.config_path.empty() && !irslam::LoadConfigFile(options.config_path, &settings, &error)) {
     std::fprintf(stderr, "irslamd: %s\n", error.c_str());
     return 2;
   }
-  if (!state_dir.empty()) core.state_dir = state_dir;
-  options.limits.max_clients = static_cast<size_t>(max_clients > 0 ? max_clients : core.api.max_clients);
-  options.limits.max_line_bytes = static_cast<size_t>(core.api.max_line_bytes);
-  options.limits.idle_timeout_s = core.api.idle_timeout_s;
-  options.limits.max_pending_bytes = static_cast<size_t>(core.api.max_pending_bytes);
+  if (!state_dir.empty()) settings.state_dir = state_dir;
+  options.limits.max_clients = static_cast<size_t>(max_clients > 0 ? max_clients : settings.api.max_clients);
+  options.limits.max_line_bytes = static_cast<size_t>(settings.api.max_line_bytes);
+  options.limits.idle_timeout_s = settings.api.idle_timeout_s;
+  options.limits.max_pending_bytes = static_cast<size_t>(settings.api.max_pending_bytes);
   if (print_default_config) {
-    std::printf("%s", irslam::DocumentedConfig(irslam::robot::DefaultCoreOptions()).c_str());
+    std::printf("%s", irslam::DocumentedConfig(irslam::DaemonSettings()).c_str());
     return 0;
   }
   if (print_config) {
-    std::printf("%s\n", irslam::DumpConfig(core).c_str());
+    std::printf("%s\n", irslam::DumpConfig(settings).c_str());
     return 0;
   }
   if (options.can_iface.empty()) {
@@ -65,7 +65,7 @@ int main(int argc, char** argv) {
   if (const char* notify = std::getenv("NOTIFY_SOCKET")) options.notify_socket = notify;
   if (sd_watchdog_enabled(0, &options.watchdog_usec) <= 0) options.watchdog_usec = 0;
   boost::asio::io_context io;
-  irslam::Daemon daemon(io, options, core);
+  irslam::Daemon daemon(io, options, settings);
   if (!daemon.Open(&error)) {
     std::fprintf(stderr, "irslamd: %s\n", error.c_str());
     return 1;

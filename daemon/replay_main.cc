@@ -195,7 +195,7 @@ int Main(int argc, char** argv) {
   }
   robot::CoreOptions core = robot::DefaultCoreOptions();
   std::string error;
-  if (!config_path.empty() && !LoadConfigFile(config_path, &core, &error)) {
+  if (!config_path.empty() && !LoadCoreConfigFile(config_path, &core, &error)) {
     std::fprintf(stderr, "irslam-replay: %s\n", error.c_str());
     return 2;
   }

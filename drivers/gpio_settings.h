@@ -1,5 +1,6 @@
-// The GPIO lines irslamd may use (config section [gpio]): plain data, shared by
-// the pure core (control/safety.h) and the libgpiod driver (drivers/gpio.h).
+// The GPIO lines irslamd may use (config section [gpio]): plain data for the
+// libgpiod driver (drivers/gpio.h), part of the daemon's settings. The inputs'
+// debounce time ([gpio].debounce_s) is the core's (control::SafetyOptions).
 #ifndef IRSLAM_DRIVERS_GPIO_SETTINGS_H_
 #define IRSLAM_DRIVERS_GPIO_SETTINGS_H_
 
@@ -18,19 +19,19 @@ struct GpioLineSpec {
   bool operator==(const GpioLineSpec&) const = default;
 };
 
-// Config section [gpio]; every line is optional.
+// Config section [gpio] but debounce_s; every line is optional.
 struct GpioSettings {
   GpioLineSpec estop;         // input: emergency-stop button
   GpioLineSpec bumper_left;   // input: left bumper switch
   GpioLineSpec bumper_right;  // input: right bumper switch
   GpioLineSpec motor_enable;  // output: motor-driver enable
   GpioLineSpec status_led;    // output: status LED
-  double debounce_s = 0.02;   // a release counts once the input stayed released this long
   bool any_used() const {
     return estop.used() || bumper_left.used() || bumper_right.used() || motor_enable.used() ||
            status_led.used();
   }
-  // The same lines (the debounce time may differ: it applies at once).
+  // The same lines (a reload that changes them needs a restart; the debounce
+  // time, the core's, applies at once).
   bool SameLines(const GpioSettings& o) const {
     return estop == o.estop && bumper_left == o.bumper_left && bumper_right == o.bumper_right &&
            motor_enable == o.motor_enable && status_led == o.status_led;

@@ -36,9 +36,9 @@ RobotCore::RobotCore(CoreOptions options)
       ir_(options_.ir),
       slam_(options_.slam),
       mission_(options_.mission, options_.wall, options_.explore, options_.model, options_.slam),
-      estop_(options_.gpio.debounce_s),
-      bump_left_(options_.gpio.debounce_s),
-      bump_right_(options_.gpio.debounce_s) {}
+      estop_(options_.safety.debounce_s),
+      bump_left_(options_.safety.debounce_s),
+      bump_right_(options_.safety.debounce_s) {}
 
 void RobotCore::OnFrame(const can_frame& frame, double now_s) {
   const drivers::MotorClient::Event ev = motor_.Handle(frame, now_s);

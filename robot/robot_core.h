@@ -16,7 +16,6 @@
 
 #include "control/mission.h"
 #include "control/safety.h"
-#include "drivers/gpio_settings.h"
 #include "drivers/ir_calibration.h"
 #include "drivers/ir_conditioner.h"
 #include "drivers/motor_client.h"
@@ -32,28 +31,11 @@ using control::MissionOptions;
 using control::MissionState;
 using control::ModelOptions;
 using control::WallFollowerOptions;
-using drivers::GpioSettings;
 
-// The control socket's settings (config section [api]; used by irslamd only).
-struct ApiSettings {
-  std::string socket_group;    // chgrp the socket to this group ("": the daemon's)
-  std::string read_group;      // may call status/map/subscribe ("": anyone who can connect)
-  std::string control_group;   // may call start/stop too ("": anyone who can connect)
-  int max_clients = 16;
-  int max_line_bytes = 64 * 1024;
-  double idle_timeout_s = 300;
-  int max_pending_bytes = 1 << 20;
-};
-
-// The bus recording (config section [record]; irslamd only, docs/replay.md).
-struct RecordSettings {
-  bool enabled = false;
-  int max_bytes = 64 << 20;     // a file is rotated at this size
-  int files = 4;                // bus.log and bus.log.1 .. bus.log.(files-1)
-  int buffer_bytes = 1 << 20;   // lines waiting for the writer thread at most (more: dropped)
-};
-
-// Every parameter of the robot software (config file sections in brackets).
+// Every parameter of the pure core (config file sections in brackets). What only
+// the daemon uses (the API socket, the GPIO lines, the bus recording, the state
+// directory) is the daemon's own (irslam::DaemonSettings, daemon/daemon_settings.h,
+// which holds a CoreOptions beside it).
 struct CoreOptions {
   slam::SlamOptions slam;                 // [robot], [sensors].mounts, [slam]
   drivers::IrCalibrationOptions ir;       // [sensors]
@@ -62,12 +44,12 @@ struct CoreOptions {
   MissionOptions mission;                 // [mission]
   ExploreOptions explore;                 // [exploration]
   ModelOptions model;                     // [model]
+  control::SafetyOptions safety;          // [gpio].debounce_s (the lines are the daemon's)
+  // The control period stays the core's: the controllers' gains and limits are
+  // tuned to it, and the core (Tick, the loop-stall grace) reasons in periods;
+  // the daemon and irslam-sim only schedule Tick at it.
   double period_s = 0.02;                 // [control].period_s
   double heartbeat_period_s = 0.1;        // [controller].heartbeat_period_s
-  ApiSettings api;                        // [api]
-  GpioSettings gpio;                      // [gpio]
-  RecordSettings record;                  // [record]
-  std::string state_dir = "/var/lib/irslam";  // [state].dir: the saved map (irslamd only)
 };
 
 CoreOptions DefaultCoreOptions();

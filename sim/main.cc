@@ -68,7 +68,7 @@ bool Load(const Common& c, World* world, robot::CoreOptions* core, uint64_t* see
     return false;
   }
   *core = robot::DefaultCoreOptions();
-  if (!c.config_path.empty() && !LoadConfigFile(c.config_path, core, &error)) {
+  if (!c.config_path.empty() && !LoadCoreConfigFile(c.config_path, core, &error)) {
     std::fprintf(stderr, "irslam-sim: %s\n", error.c_str());
     return false;
   }

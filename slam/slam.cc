@@ -1,3 +1,14 @@
+// Slam's methods (the class and its algorithm: slam/slam.h) and its option tables.
+// Longer than the ~400-line bar (issue 10) on purpose: after the short map-frame
+// views at the top (map_lines, map_trajectory, ToMap: ~50 lines) and the key tables
+// at the bottom (~45 lines), the rest is one algorithm over one private state —
+// the window of scans, the EKF's pose and line rows, the end points — as
+// Associate (paper section 4: gating, the constrained update, collinear
+// insertion) calling InsertLine, ExtendEndpoints, ReprojectEndpoints and
+// MergeOverlapping (section 4.5). Those are private members that read and
+// rewrite the same rows and index map; split across files they would be one
+// class's internals in two places with no interface between them, which reads
+// worse than one file in the paper's order.
 #include "slam/slam.h"
 
 #include <Eigen/LU>

@@ -8,7 +8,7 @@
 #include "daemon/config.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  irslam::robot::CoreOptions o = irslam::robot::DefaultCoreOptions();
+  irslam::DaemonSettings o;
   const std::string before = irslam::DumpConfig(o);
   std::string error;
   if (!irslam::ParseConfig(std::string_view(reinterpret_cast<const char*>(data), size), &o, &error)) {

@@ -189,7 +189,7 @@ int main(int argc, char** argv) {
   robot::CoreOptions defaults = robot::DefaultCoreOptions();
   if (!config_path.empty()) {
     std::string error;
-    if (!LoadConfigFile(config_path, &defaults, &error)) {
+    if (!LoadCoreConfigFile(config_path, &defaults, &error)) {
       std::fprintf(stderr, "irslam-report: %s\n", error.c_str());
       return 2;
     }

@@ -11,19 +11,19 @@ namespace irslam {
 namespace {
 
 TEST(ConfigTest, ShippedFileEqualsTheBuiltInDefaults) {
-  robot::CoreOptions o = robot::DefaultCoreOptions();
+  DaemonSettings o;
   std::string error;
   ASSERT_TRUE(LoadConfigFile(IRSLAM_SOURCE_DIR "/daemon/irslamd.conf", &o, &error)) << error;
   // Sensor mounts and Hough angles in the file are rounded to 1e-7.
-  const auto d = robot::DefaultCoreOptions();
-  EXPECT_NEAR(o.slam.extraction.hough_theta_res_rad, d.slam.extraction.hough_theta_res_rad, 1e-7);
-  EXPECT_NEAR(o.slam.extraction.hough_theta_window_rad, d.slam.extraction.hough_theta_window_rad, 1e-7);
-  o.slam.extraction.hough_theta_res_rad = d.slam.extraction.hough_theta_res_rad;
-  o.slam.extraction.hough_theta_window_rad = d.slam.extraction.hough_theta_window_rad;
+  const DaemonSettings d;
+  EXPECT_NEAR(o.core.slam.extraction.hough_theta_res_rad, d.core.slam.extraction.hough_theta_res_rad, 1e-7);
+  EXPECT_NEAR(o.core.slam.extraction.hough_theta_window_rad, d.core.slam.extraction.hough_theta_window_rad, 1e-7);
+  o.core.slam.extraction.hough_theta_res_rad = d.core.slam.extraction.hough_theta_res_rad;
+  o.core.slam.extraction.hough_theta_window_rad = d.core.slam.extraction.hough_theta_window_rad;
   for (int i = 0; i < kNumIrSensors; ++i) {
-    EXPECT_NEAR(o.slam.mounts[i].theta, d.slam.mounts[i].theta, 1e-6);
-    EXPECT_NEAR(o.slam.mounts[i].x, d.slam.mounts[i].x, 1e-6);
-    o.slam.mounts[i] = d.slam.mounts[i];
+    EXPECT_NEAR(o.core.slam.mounts[i].theta, d.core.slam.mounts[i].theta, 1e-6);
+    EXPECT_NEAR(o.core.slam.mounts[i].x, d.core.slam.mounts[i].x, 1e-6);
+    o.core.slam.mounts[i] = d.core.slam.mounts[i];
   }
   EXPECT_EQ(DumpConfig(o), DumpConfig(d));
 }
@@ -33,16 +33,16 @@ TEST(ConfigTest, ShippedFileEqualsTheBuiltInDefaults) {
 // `build/daemon/irslamd --print-default-config > daemon/irslamd.conf`).
 TEST(ConfigTest, ShippedFileIsGeneratedFromTheOptionTables) {
   EXPECT_EQ(testing::ReadFile(IRSLAM_SOURCE_DIR "/daemon/irslamd.conf"),
-            DocumentedConfig(robot::DefaultCoreOptions()))
+            DocumentedConfig(DaemonSettings()))
       << "daemon/irslamd.conf is not what the option tables say: regenerate it";
 }
 
 // Every key the daemon prints (--print-config) is in the generated file too.
 TEST(ConfigTest, GeneratedFileListsEveryParameter) {
   std::string error;
-  const auto shipped = ParseJsonText(DocumentedConfig(robot::DefaultCoreOptions()), &error);
+  const auto shipped = ParseJsonText(DocumentedConfig(DaemonSettings()), &error);
   ASSERT_TRUE(shipped) << error;
-  const auto all = ParseJsonText(DumpConfig(robot::DefaultCoreOptions()), &error);
+  const auto all = ParseJsonText(DumpConfig(DaemonSettings()), &error);
   ASSERT_TRUE(all) << error;
   const nlohmann::json flat_shipped = shipped->flatten(), flat_all = all->flatten();
   EXPECT_EQ(flat_shipped.size(), flat_all.size());
@@ -52,18 +52,18 @@ TEST(ConfigTest, GeneratedFileListsEveryParameter) {
 }
 
 TEST(ConfigTest, OverridesOnlyWhatIsGiven) {
-  robot::CoreOptions o = robot::DefaultCoreOptions();
+  DaemonSettings o;
   std::string error;
   ASSERT_TRUE(ParseConfig(R"({ // comment
       "wall_follow": {"follow_distance_m": 0.5}, "control": {"period_s": 0.01}})", &o, &error))
       << error;
-  EXPECT_DOUBLE_EQ(o.wall.follow_distance_m, 0.5);
-  EXPECT_DOUBLE_EQ(o.period_s, 0.01);
-  EXPECT_DOUBLE_EQ(o.wall.cruise_speed_mps, robot::DefaultCoreOptions().wall.cruise_speed_mps);
+  EXPECT_DOUBLE_EQ(o.core.wall.follow_distance_m, 0.5);
+  EXPECT_DOUBLE_EQ(o.core.period_s, 0.01);
+  EXPECT_DOUBLE_EQ(o.core.wall.cruise_speed_mps, robot::DefaultCoreOptions().wall.cruise_speed_mps);
 }
 
 TEST(ConfigTest, RejectsUnknownKeysByFullName) {
-  robot::CoreOptions o = robot::DefaultCoreOptions();
+  DaemonSettings o;
   std::string error;
   EXPECT_FALSE(ParseConfig(R"({"wall_follow": {"follow_distanse_m": 0.5}})", &o, &error));
   EXPECT_EQ(error, "config: wall_follow.follow_distanse_m is not a known key");
@@ -84,7 +84,7 @@ TEST(ConfigTest, RejectsBadValuesWithOneLineNamingTheKey) {
       {R"({"control": {"period_s": 1e999}})", "config: not valid JSON: number overflow"},
   };
   for (const auto& [text, want] : cases) {
-    robot::CoreOptions o = robot::DefaultCoreOptions();
+    DaemonSettings o;
     const std::string before = DumpConfig(o);
     std::string error;
     EXPECT_FALSE(ParseConfig(text, &o, &error)) << text;
@@ -95,7 +95,7 @@ TEST(ConfigTest, RejectsBadValuesWithOneLineNamingTheKey) {
 }
 
 TEST(ConfigTest, MissingFileIsOneLine) {
-  robot::CoreOptions o;
+  DaemonSettings o;
   std::string error;
   EXPECT_FALSE(LoadConfigFile("/nonexistent/irslamd.conf", &o, &error));
   EXPECT_EQ(error, "config: cannot read /nonexistent/irslamd.conf: No such file or directory");
@@ -108,7 +108,7 @@ TEST(ConfigTest, AFifoOrDeviceIsRefusedAtOnce) {
   ::mkdir(dir.c_str(), 0700);
   const std::string fifo = dir + "/irslamd.conf";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  robot::CoreOptions o;
+  DaemonSettings o;
   std::string error;
   EXPECT_FALSE(LoadConfigFile(fifo, &o, &error));
   EXPECT_EQ(error, "config: cannot read " + fifo + ": not a regular file");
@@ -119,7 +119,7 @@ TEST(ConfigTest, AFifoOrDeviceIsRefusedAtOnce) {
 }
 
 TEST(ConfigTest, DeepNestingIsOneLineNotACrash) {
-  robot::CoreOptions o;
+  DaemonSettings o;
   std::string error;
   const std::string deep = "{\"slam\": " + std::string(150000, '[') + std::string(150000, ']') + "}";
   EXPECT_FALSE(ParseConfig(deep, &o, &error));
@@ -175,16 +175,31 @@ namespace {
 // SIGHUP keeps the GPIO lines opened at start: only a change of lines needs a
 // restart; a new debounce time applies at once.
 TEST(ConfigTest, GpioLinesCompareWithoutTheDebounceTime) {
-  drivers::GpioSettings a, b;
-  a.estop = {"gpio-sim-robot", "estop", true};
+  DaemonSettings a, b;
+  a.gpio.estop = {"gpio-sim-robot", "estop", true};
   b = a;
-  b.debounce_s = 0.05;
-  EXPECT_TRUE(a.SameLines(b));
-  b.estop.active_low = false;
-  EXPECT_FALSE(a.SameLines(b));
+  b.core.safety.debounce_s = 0.05;
+  EXPECT_TRUE(a.gpio.SameLines(b.gpio));
+  b.gpio.estop.active_low = false;
+  EXPECT_FALSE(a.gpio.SameLines(b.gpio));
   b = a;
-  b.status_led.chip = "gpiochip0";
-  EXPECT_FALSE(a.SameLines(b));
+  b.gpio.status_led.chip = "gpiochip0";
+  EXPECT_FALSE(a.gpio.SameLines(b.gpio));
+}
+
+// [gpio] is split: the lines are the daemon's, debounce_s the core's.
+TEST(ConfigTest, GpioSectionSetsTheDaemonsLinesAndTheCoresDebounce) {
+  DaemonSettings o;
+  std::string error;
+  ASSERT_TRUE(ParseConfig(R"({"gpio": {"estop": {"chip": "gpiochip0", "line": 3}, "debounce_s": 0.05},
+      "state": {"dir": "/tmp/x"}, "api": {"max_clients": 3}, "record": {"files": 2}})", &o, &error))
+      << error;
+  EXPECT_EQ(o.gpio.estop.chip, "gpiochip0");
+  EXPECT_EQ(o.gpio.estop.line, "3");
+  EXPECT_DOUBLE_EQ(o.core.safety.debounce_s, 0.05);
+  EXPECT_EQ(o.state_dir, "/tmp/x");
+  EXPECT_EQ(o.api.max_clients, 3);
+  EXPECT_EQ(o.record.files, 2);
 }
 
 }  // namespace

@@ -27,19 +27,18 @@ class DaemonMissionTest : public ::testing::Test {
     options_.socket_path = dir_ + "/irslamd.sock";
     options_.config_path = dir_ + "/irslamd.conf";
     std::ofstream(options_.config_path) << "{}";
-    core_ = robot::DefaultCoreOptions();
-    core_.state_dir = dir_ + "/state";
+    settings_.state_dir = dir_ + "/state";
   }
   void TearDown() override {
     daemon_.reset();
     std::filesystem::remove_all(dir_);
   }
   void Open() {
-    daemon_ = std::make_unique<Daemon>(io_, options_, core_, [this] { return now_; });
+    daemon_ = std::make_unique<Daemon>(io_, options_, settings_, [this] { return now_; });
     std::string error;
     ASSERT_TRUE(daemon_->Open(&error)) << error;
     sim_ = std::make_unique<sim::SimController>(testing::LoadTestWorld("wall_follow_fig14"),
-                                                sim::SimOptionsFrom(core_), 1);
+                                                sim::SimOptionsFrom(settings_.core), 1);
     controller_ = drivers::OpenCanBus(sim_io_, {options_.can_iface, {}}, &error);
     ASSERT_TRUE(controller_) << error;
     controller_->Start([this](const can_frame& f, double) { sim_->HandleFrame(f); });
@@ -85,7 +84,7 @@ class DaemonMissionTest : public ::testing::Test {
 
   std::string dir_;
   DaemonOptions options_;
-  robot::CoreOptions core_;
+  DaemonSettings settings_;  // built-in defaults
   WallTime now_ = WallTime(std::chrono::hours(100));
   double t_ = 0;
   boost::asio::io_context io_, sim_io_;
@@ -117,7 +116,7 @@ TEST_F(DaemonMissionTest, AReloadAfterAMissionNeitherServesNorSavesAnEmptyMap) {
   EXPECT_EQ(Call("stop")["result"]["map"], "unchanged");
   EXPECT_EQ(daemon_->Shutdown(), 0);
   std::string error;
-  auto saved = MapStore(core_.state_dir).Load(&error);
+  auto saved = MapStore(settings_.state_dir).Load(&error);
   ASSERT_TRUE(saved) << error;
   EXPECT_EQ(saved->seq, 1u);
   EXPECT_EQ(saved->map["lines"].size(), lines);
@@ -126,7 +125,7 @@ TEST_F(DaemonMissionTest, AReloadAfterAMissionNeitherServesNorSavesAnEmptyMap) {
 // The odometry calibration a mission learnt is kept in the saved map, carried
 // over a reload, and the next run of the daemon starts from it.
 TEST_F(DaemonMissionTest, TheOdometryCalibrationIsSavedCarriedOverAndStartedFrom) {
-  core_.slam.calibration.enabled = true;
+  settings_.core.slam.calibration.enabled = true;
   std::ofstream(options_.config_path) << R"({"slam": {"calibration": {"enabled": true}}})";
   Open();
   Run(1);
@@ -138,7 +137,7 @@ TEST_F(DaemonMissionTest, TheOdometryCalibrationIsSavedCarriedOverAndStartedFrom
   // It moved from the prior (1, 1, 1; sigma 0.01, 0.01, 0.03) while driving.
   EXPECT_LT(learnt["std"][0].get<double>(), 0.01);
   std::string error;
-  auto saved = MapStore(core_.state_dir).Load(&error);
+  auto saved = MapStore(settings_.state_dir).Load(&error);
   ASSERT_TRUE(saved) << error;
   ASSERT_TRUE(saved->map.contains("calibration"));
   EXPECT_EQ(saved->map["calibration"]["scale"], learnt["scale"]);
@@ -187,7 +186,7 @@ TEST_F(DaemonMissionTest, AConfigDuringAMissionAppliesWhenItEndsAndTheMapIsKept)
 // Issue 12 B2: a failed save still answered stop with success, and SIGTERM exited 0.
 TEST_F(DaemonMissionTest, AFailedSaveMakesStopAnErrorAndShutdownNonZero) {
   std::ofstream(dir_ + "/plain-file") << "x";
-  core_.state_dir = dir_ + "/plain-file/state";  // cannot be created, even by root
+  settings_.state_dir = dir_ + "/plain-file/state";  // cannot be created, even by root
   Open();
   Run(1);
   ASSERT_TRUE(Call("start").contains("result"));
@@ -198,7 +197,7 @@ TEST_F(DaemonMissionTest, AFailedSaveMakesStopAnErrorAndShutdownNonZero) {
   ASSERT_TRUE(stop.contains("error")) << stop;
   EXPECT_EQ(stop["error"]["code"], rpc::kMapNotSaved);
   EXPECT_EQ(stop["error"]["message"].get<std::string>().rfind(
-                "stopped, but the map was not saved: map: cannot create " + core_.state_dir + ": ", 0),
+                "stopped, but the map was not saved: map: cannot create " + settings_.state_dir + ": ", 0),
             0u)
       << stop;
   const auto s = daemon_->StatusJson();
@@ -246,7 +245,7 @@ TEST_F(DaemonMissionTest, StopHandsTheMapToTheWriterAndRepliesWhenItIsWritten) {
   EXPECT_EQ(s["seq"], 1);
   EXPECT_EQ(s["last_result"], "saved");
   std::string error;
-  auto saved = MapStore(core_.state_dir).Load(&error);
+  auto saved = MapStore(settings_.state_dir).Load(&error);
   ASSERT_TRUE(saved) << error;
   EXPECT_EQ(saved->reason, "stop");
   EXPECT_EQ(saved->map["lines"].size(), MapLines());

@@ -61,15 +61,14 @@ class DaemonTest : public ::testing::Test {
     dir_ = testing::MakeTempDir();
     options_.can_iface = "unix:" + dir_ + "/bus";
     options_.socket_path = dir_ + "/irslamd.sock";
-    core_ = robot::DefaultCoreOptions();
-    core_.state_dir = dir_ + "/state";
+    settings_.state_dir = dir_ + "/state";
   }
   void TearDown() override {
     daemon_.reset();
     std::filesystem::remove_all(dir_);
   }
   void Open() {
-    daemon_ = std::make_unique<Daemon>(io_, options_, core_, [this] { return now_; });
+    daemon_ = std::make_unique<Daemon>(io_, options_, settings_, [this] { return now_; });
     std::string error;
     ASSERT_TRUE(daemon_->Open(&error)) << error;
   }
@@ -104,7 +103,7 @@ class DaemonTest : public ::testing::Test {
 
   std::string dir_;
   DaemonOptions options_;
-  robot::CoreOptions core_;
+  DaemonSettings settings_;  // built-in defaults
   WallTime now_ = WallTime(std::chrono::hours(100));
   boost::asio::io_context io_;
   std::unique_ptr<Daemon> daemon_;
@@ -235,7 +234,7 @@ TEST_F(DaemonTest, StatusHasTheDaemonsPartsAndStopWithoutAMissionSavesNothing) {
   ASSERT_TRUE(stop.contains("result")) << stop;
   EXPECT_EQ(stop["result"]["state"], "idle");
   EXPECT_EQ(stop["result"]["map"], "nothing");
-  EXPECT_FALSE(std::filesystem::exists(core_.state_dir + "/map.json"));
+  EXPECT_FALSE(std::filesystem::exists(settings_.state_dir + "/map.json"));
 }
 
 // Issue 12: two daemons on one bus both commanded the wheels, unnoticed.
@@ -316,7 +315,7 @@ TEST_F(DaemonTest, StartRejectsABadModeOrUnknownParams) {
 TEST_F(DaemonTest, ABadReloadConfigLeavesTheRunningDaemonUntouched) {
   options_.config_path = dir_ + "/irslamd.conf";
   std::ofstream(options_.config_path) << R"({"control": {"period_s": 0.01}})";
-  core_.period_s = 0.01;
+  settings_.core.period_s = 0.01;
   Open();
   const auto check = [&](const std::string& what) {
     ::testing::internal::CaptureStderr();

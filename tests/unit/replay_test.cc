@@ -264,7 +264,7 @@ std::vector<std::string> ReadLines(const std::string& path) {
 
 TEST(BusRecorderTest, WritesTheHeaderAndEveryFrameAndRotatesAtMaxBytes) {
   const std::string dir = testing::MakeTempDir();
-  robot::RecordSettings settings;
+  RecordSettings settings;
   settings.max_bytes = 65536;
   settings.files = 3;
   settings.buffer_bytes = 1 << 20;
@@ -306,7 +306,7 @@ TEST(BusRecorderTest, WritesTheHeaderAndEveryFrameAndRotatesAtMaxBytes) {
 
 TEST(BusRecorderTest, WithASmallBufferEveryLineIsWrittenOrCountedAsDropped) {
   const std::string dir = testing::MakeTempDir();
-  robot::RecordSettings settings;
+  RecordSettings settings;
   settings.buffer_bytes = 4096;  // about 100 lines
   BusRecorder rec(dir, settings, {0, 1, 0.02}, "can0");
   std::string error;
