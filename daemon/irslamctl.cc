@@ -14,6 +14,7 @@
 #include "daemon/map_pgm.h"
 #include "daemon/map_svg.h"
 #include "daemon/rpc_client.h"
+#include "io/file_io.h"
 
 namespace irslam {
 namespace {
@@ -107,17 +108,6 @@ void PrintStatus(const nlohmann::json& s) {
   std::printf("uptime:     %s s\n", Num(s.value("uptime", 0.0), 1).c_str());
 }
 
-bool WriteFile(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) return false;
-    out << text;
-    if (!out) return false;
-  }
-  return std::rename(tmp.c_str(), path.c_str()) == 0;
-}
-
 }  // namespace
 }  // namespace irslam
 
@@ -193,10 +183,10 @@ int main(int argc, char** argv) {
     if (out_path.empty() && svg_path.empty() && pgm_path.empty()) {
       std::printf("%s\n", m->dump(1).c_str());
     }
-    if (!out_path.empty() && !WriteFile(out_path, m->dump(1) + "\n")) {
+    if (!out_path.empty() && !WriteFileReplacing(out_path, m->dump(1) + "\n")) {
       return Fail("cannot write " + out_path);
     }
-    if (!svg_path.empty() && !WriteFile(svg_path, RenderMapSvg(*m, nullptr, nullptr))) {
+    if (!svg_path.empty() && !WriteFileReplacing(svg_path, RenderMapSvg(*m, nullptr, nullptr))) {
       return Fail("cannot write " + svg_path);
     }
     if (!pgm_path.empty() && !irslam::WritePgmMap(*m, pgm_path, pgm_res, &error)) return Fail(error);

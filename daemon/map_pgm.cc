@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <fstream>
 
+#include "io/file_io.h"
+
 namespace irslam {
 namespace {
 
@@ -161,16 +163,7 @@ bool WritePgmMap(const nlohmann::json& map, const std::string& pgm_path, double 
   const std::pair<std::string, std::string> outputs[] = {{pgm_path, EncodePgm(*image)},
                                                          {PgmYamlPath(pgm_path), MapServerYaml(*image, file)}};
   for (const auto& [path, text] : outputs) {
-    const std::string tmp = path + ".tmp";
-    {
-      std::ofstream out(tmp, std::ios::binary);
-      out << text;
-      if (!out) {
-        *error = "cannot write " + path;
-        return false;
-      }
-    }
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    if (!WriteFileReplacing(path, text)) {
       *error = "cannot write " + path;
       return false;
     }

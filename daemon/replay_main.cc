@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "io/file_io.h"
 #include "daemon/candump_log.h"
 #include "daemon/config.h"
 #include "daemon/core_json.h"
@@ -20,17 +21,6 @@
 
 namespace irslam {
 namespace {
-
-bool WriteText(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) return false;
-    out << text;
-    if (!out) return false;
-  }
-  return std::rename(tmp.c_str(), path.c_str()) == 0;
-}
 
 // Reads LOG files line by line; Next() gives each line with its file and number.
 class LogReader {
@@ -245,11 +235,11 @@ int Main(int argc, char** argv) {
   const double cpu = CpuSeconds() - cpu_begin;
   const ReplayStats& s = replay.stats();
   const nlohmann::json map = ToJson(replay.core().Map());
-  if (!map_out.empty() && !WriteText(map_out, map.dump(1) + "\n")) {
+  if (!map_out.empty() && !WriteFileReplacing(map_out, map.dump(1) + "\n")) {
     std::fprintf(stderr, "irslam-replay: cannot write %s\n", map_out.c_str());
     return 1;
   }
-  if (!svg_out.empty() && !WriteText(svg_out, RenderMapSvg(map, nullptr, nullptr))) {
+  if (!svg_out.empty() && !WriteFileReplacing(svg_out, RenderMapSvg(map, nullptr, nullptr))) {
     std::fprintf(stderr, "irslam-replay: cannot write %s\n", svg_out.c_str());
     return 1;
   }
@@ -258,7 +248,7 @@ int Main(int argc, char** argv) {
     return 1;
   }
   const nlohmann::json stats = StatsJson(s, timing, seconds, cpu);
-  if (!stats_out.empty() && !WriteText(stats_out, stats.dump(1) + "\n")) {
+  if (!stats_out.empty() && !WriteFileReplacing(stats_out, stats.dump(1) + "\n")) {
     std::fprintf(stderr, "irslam-replay: cannot write %s\n", stats_out.c_str());
     return 1;
   }

@@ -5,7 +5,9 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
 
 namespace irslam {
 
@@ -59,6 +61,17 @@ bool ReadRegularFile(const std::string& path, size_t max_bytes, std::string* tex
   out.resize(got);
   *text = std::move(out);
   return true;
+}
+
+bool WriteFileReplacing(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) return false;
+    out << text;
+    if (!out) return false;
+  }
+  return std::rename(tmp.c_str(), path.c_str()) == 0;
 }
 
 }  // namespace irslam

@@ -15,6 +15,12 @@ namespace irslam {
 bool ReadRegularFile(const std::string& path, size_t max_bytes, std::string* text,
                      std::string* error);
 
+// Writes text to PATH.tmp, then renames it over path, so a reader never sees a
+// half-written file (the tools' outputs: maps, SVG, PGM; not the daemon's saved
+// map, which daemon/map_store writes with O_EXCL|O_NOFOLLOW and fsync). False when
+// it cannot be written.
+bool WriteFileReplacing(const std::string& path, const std::string& text);
+
 }  // namespace irslam
 
 #endif  // IRSLAM_IO_FILE_IO_H_

@@ -12,6 +12,7 @@
 #include <memory>
 #include <sstream>
 
+#include "io/file_io.h"
 #include "robot/robot_core.h"
 #include "daemon/config.h"
 #include "daemon/core_json.h"
@@ -31,15 +32,7 @@ namespace {
 constexpr int kExitUsage = 2;
 
 bool WriteJson(const std::string& path, const nlohmann::json& j) {
-  if (path.empty()) return true;
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) return false;
-    out << j.dump(1) << "\n";
-    if (!out) return false;
-  }
-  return std::rename(tmp.c_str(), path.c_str()) == 0;
+  return path.empty() || WriteFileReplacing(path, j.dump(1) + "\n");
 }
 
 std::string ReadText(const std::string& path) {
