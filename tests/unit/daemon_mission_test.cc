@@ -66,17 +66,21 @@ class DaemonMissionTest : public ::testing::Test {
       Pump();
     }
   }
-  nlohmann::json Call(const std::string& method) {
+  // Hands a request to the daemon as this process; *reply is set when it answers
+  // (a stop's answer waits for the map writer thread's outcome, posted onto io_).
+  void Send(const std::string& method, int id, nlohmann::json* reply) {
     rpc::Request r;
-    r.id = 1;
+    r.id = id;
     r.method = method;
     PeerCred self;
     self.uid = ::getuid();
     self.gid = ::getgid();
     self.groups = {::getgid()};
+    daemon_->Handle(r, self, [reply](nlohmann::json j) { *reply = std::move(j); });
+  }
+  nlohmann::json Call(const std::string& method) {
     nlohmann::json reply;
-    daemon_->Handle(r, self, [&reply](nlohmann::json j) { reply = std::move(j); });
-    // A stop's reply waits for the map writer thread's outcome, posted onto io_.
+    Send(method, 1, &reply);
     while (reply.is_null()) io_.run_one();
     return reply;
   }
@@ -219,14 +223,8 @@ TEST_F(DaemonMissionTest, StopHandsTheMapToTheWriterAndRepliesWhenItIsWritten) {
   Run(1);
   ASSERT_TRUE(Call("start").contains("result"));
   Run(15);
-  rpc::Request r;
-  r.id = 9;
-  r.method = "stop";
-  PeerCred self;
-  self.uid = ::getuid();
-  self.gid = ::getgid();
   nlohmann::json reply;
-  daemon_->Handle(r, self, [&reply](nlohmann::json j) { reply = std::move(j); });
+  Send("stop", 9, &reply);
   EXPECT_TRUE(reply.is_null());  // not answered yet: the file is being written
   EXPECT_TRUE(daemon_->maps().writing());
   auto s = daemon_->StatusJson()["map_store"];
@@ -261,14 +259,8 @@ TEST_F(DaemonMissionTest, ShutdownWaitsForTheWriteInFlightAndAnswersTheWaitingSt
   Run(1);
   ASSERT_TRUE(Call("start").contains("result"));
   Run(12);
-  rpc::Request r;
-  r.id = 3;
-  r.method = "stop";
-  PeerCred self;
-  self.uid = ::getuid();
-  self.gid = ::getgid();
   nlohmann::json reply;
-  daemon_->Handle(r, self, [&reply](nlohmann::json j) { reply = std::move(j); });
+  Send("stop", 3, &reply);
   ASSERT_TRUE(reply.is_null());
   EXPECT_EQ(daemon_->Shutdown(), 0);
   ASSERT_TRUE(reply.contains("result")) << reply;
