@@ -11,6 +11,7 @@
 
 #include <linux/can.h>
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -90,6 +91,14 @@ class RobotCore {
   CoreStatus Status(double now_s) const;
   MapSnapshot Map() const;
 
+  // The map the next start works in (issue 14): the daemon's saved file or
+  // `irslam-sim run --map-in`. With one, start relocalises in it first (state
+  // relocalize) and then continues in its frame with its ids: cleaning when
+  // the saved room is modelled, else a modelling pass that completes what is
+  // incomplete. nullopt (start fresh): explore from nothing.
+  void SetSavedMap(std::optional<MapSnapshot> map) { saved_map_ = std::move(map); }
+  const std::optional<MapSnapshot>& saved_map() const { return saved_map_; }
+
   MissionState state() const { return mission_.state(); }
   const slam::Slam& slam() const { return slam_; }
   const drivers::MotorClient& motor() const { return motor_; }
@@ -124,6 +133,7 @@ class RobotCore {
   bool graced_last_tick_ = false;  // the last tick did not judge the controller (stalled)
   uint64_t loop_stalls_ = 0;
   WheelCommand last_cmd_;
+  std::optional<MapSnapshot> saved_map_;
 };
 
 }  // namespace irslam::robot

@@ -73,6 +73,19 @@ struct FrameCounters {
   drivers::IrConditionerCounters ir;
 };
 
+// Relocalisation in a saved map (issue 14): while in state relocalize, and
+// after the commit (committed = true, the time and the number of hypotheses
+// left then).
+struct RelocalizeStatus {
+  bool committed = false;
+  double started_t = 0;     // robot time relocalisation began
+  double committed_t = 0;   // robot time of the commit (when committed)
+  int hypotheses = 0;       // kept now (or at the commit)
+  double best_score = 0;    // of the best hypothesis, [-inf, 1]
+  double evidence_m = 0;    // local line length gathered
+  int attempts = 1;         // relocalisations since the start (> 1: the map disagreed, e.g. kidnap)
+};
+
 struct CoreStatus {
   double robot_time = 0;
   MissionStatus mission;
@@ -85,6 +98,8 @@ struct CoreStatus {
   FrameCounters frames;
   // Present when cleaning ran since the last start (contracts §7).
   std::optional<control::CleaningProgress> cleaning;
+  // Present while relocalising in a saved map and after (contracts §7, issue 14).
+  std::optional<RelocalizeStatus> relocalize;
 };
 
 // The map as the API serves it (map frame: the first wall along x).
@@ -100,6 +115,14 @@ struct MapSnapshot {
   // The odometry's calibration learnt (kept in the saved map: the next mission
   // starts from it); none when it is not estimated.
   std::optional<slam::CalibrationEstimate> calibration;
+  // When this mission started in a saved map and relocalised in it (contracts
+  // §7: "relocalized": {"t": T, "hypotheses": N}); the map is then in the saved
+  // map's frame with its ids.
+  struct Relocalized {
+    double t = 0;
+    int hypotheses = 0;
+  };
+  std::optional<Relocalized> relocalized;
 };
 
 }  // namespace irslam::robot
