@@ -23,12 +23,14 @@ SimOptions SimOptionsFrom(const robot::CoreOptions& core) {
 InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options, uint64_t seed,
                           double max_time_s,
                           const std::function<void(const InProcessRun&)>& on_tick,
-                          const FaultSpec* faults, robot::WorkClockNs work_clock) {
+                          const FaultSpec* faults, robot::WorkClockNs work_clock,
+                          const std::optional<robot::MapSnapshot>& saved_map) {
   const robot::WorkClockNs now_ns = work_clock ? std::move(work_clock) : robot::WorkClockNs(NowNs);
   InProcessRun run;
   run.sim = std::make_unique<SimController>(world, SimOptionsFrom(options), seed);
   run.core = std::make_unique<robot::RobotCore>(options);
   run.core->SetWorkClock(now_ns);
+  if (saved_map) run.core->SetSavedMap(saved_map);
   const int64_t run_start = NowNs();
   robot::TickWork work;
   if (faults) run.faults = std::make_unique<FaultInjector>(*faults, seed);

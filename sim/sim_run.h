@@ -5,6 +5,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "robot/robot_core.h"
@@ -36,7 +37,8 @@ InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options,
                           double max_time_s,
                           const std::function<void(const InProcessRun&)>& on_tick = nullptr,
                           const FaultSpec* faults = nullptr,
-                          robot::WorkClockNs work_clock = nullptr);
+                          robot::WorkClockNs work_clock = nullptr,
+                          const std::optional<robot::MapSnapshot>& saved_map = std::nullopt);
 
 }  // namespace irslam::sim
 
