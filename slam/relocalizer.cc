@@ -1,5 +1,6 @@
 #include "slam/relocalizer.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -354,6 +355,51 @@ std::vector<double> BestOffsets(std::vector<Vote> votes, double tolerance, int c
   return out;
 }
 
+// Least-squares refinement of t (Gauss-Newton, a few steps): the end points
+// of each placed local line onto the saved line it overlaps most (same
+// direction and side, within line_tolerance_m), weighted by length. The vote
+// gives the offsets only to the cluster's width and the rotation comes from
+// the axis estimates alone; this uses all matched lines at once.
+Pose2 Refine(const RelocalizeOptions& options, const SavedMap& saved, const LocalEvidence& local, Pose2 t) {
+  for (int iteration = 0; iteration < 3; ++iteration) {
+    Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d b = Eigen::Vector3d::Zero();
+    int matched_dirs[2] = {0, 0};
+    for (const LocalLine& l : local.lines) {
+      const AxisSegment s = Place(options, t, l).seg;
+      if (s.dir < 0) continue;
+      const AxisSegment* best = nullptr;
+      double best_overlap = 0;
+      for (const AxisSegment& m : saved.segments) {
+        if (m.dir != s.dir || std::abs(m.offset - s.offset) > options.line_tolerance_m) continue;
+        if (!SidesAgree(m.side, s.side)) continue;
+        const double overlap = std::min(s.hi, m.hi + kEndSlackM) - std::max(s.lo, m.lo - kEndSlackM);
+        if (overlap > best_overlap) {
+          best_overlap = overlap;
+          best = &m;
+        }
+      }
+      if (best == nullptr) continue;
+      ++matched_dirs[s.dir];
+      const int k = 1 - s.dir;
+      for (const Vec2& p : {l.a, l.b}) {
+        const Vec2 q = Transform(t, p);
+        const Vec2 rotated = q - Vec2(t.x, t.y);
+        const Eigen::Vector3d j(k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0, k == 0 ? -rotated.y() : rotated.x());
+        const double w = best_overlap / 2;
+        a += w * j * j.transpose();
+        b += w * j * (q[k] - best->offset);
+      }
+    }
+    // Both offsets and the rotation need lines of both directions.
+    if (matched_dirs[0] == 0 || matched_dirs[1] == 0 || matched_dirs[0] + matched_dirs[1] < 3) return t;
+    const Eigen::Vector3d delta = -a.ldlt().solve(b);
+    if (!delta.allFinite() || std::abs(delta.z()) > options.angle_tolerance_rad) return t;
+    t = {t.x + delta.x(), t.y + delta.y(), NormalizeAngle(t.theta + delta.z())};
+  }
+  return t;
+}
+
 bool SamePose(const RelocalizeOptions& options, const Pose2& a, const Pose2& b) {
   return std::hypot(a.x - b.x, a.y - b.y) < options.distinct_m &&
          std::abs(NormalizeAngle(a.theta - b.theta)) < options.distinct_rad;
@@ -478,6 +524,15 @@ void Relocalizer::Update(const std::vector<LineFeature>& local_lines,
       hypotheses_.push_back(h);
     }
   }
+  // The kept ones refined (kept when that does not lower the score).
+  const Pose2 to_axis{0, 0, -saved.axis_rad};
+  for (PoseHypothesis& h : hypotheses_) {
+    const Pose2 refined = Refine(options_, saved, local, Compose(to_axis, h.local_to_map));
+    const PoseHypothesis r = Score(options_, saved, local, refined);
+    if (r.score >= h.score - 0.02) h = r;
+  }
+  std::stable_sort(hypotheses_.begin(), hypotheses_.end(),
+                   [](const PoseHypothesis& a, const PoseHypothesis& b) { return a.score > b.score; });
 }
 
 std::optional<PoseHypothesis> Relocalizer::Decision() const {

@@ -33,6 +33,9 @@
 //    every saved line), crossing_conflict_m per crossing of a saved line by
 //    the local trajectory, and trajectory length outside that box grown by
 //    free_margin_m;
+//  - the kept hypotheses are refined by least squares (end points of the
+//    matched local lines onto their saved lines: rotation and translation
+//    together) and rescored;
 //  - hypotheses closer than distinct_m and distinct_rad are one; several are
 //    kept while ambiguous (a bare rectangle has two, a square four); one is
 //    committed only when the evidence is long enough and has both directions,
@@ -111,8 +114,8 @@ class Relocalizer {
   // The hypothesis to commit to, when one is clearly best (see the options).
   std::optional<PoseHypothesis> Decision() const;
   double evidence_m() const { return evidence_m_; }
-  // Evidence length along each of the local map's two axes (local line 1's
-  // direction first; 0 before any line).
+  // Evidence length along each of the local map's two axes (in no particular
+  // order; 0 before any line).
   const std::array<double, 2>& evidence_by_direction_m() const { return evidence_by_direction_m_; }
   // Both directions have at least min_direction_m of evidence (else the
   // translation along the seen direction is unconstrained: no commit).
