@@ -25,6 +25,14 @@ Vec2 Transform(const Pose2& t, const Vec2& p) {
   return {x, y};
 }
 
+// A pose as a rotation and a translation, for transforming many points (ToParent's arithmetic).
+struct Rigid {
+  explicit Rigid(const Pose2& t) : c(std::cos(t.theta)), s(std::sin(t.theta)), x(t.x), y(t.y) {}
+  Vec2 Rotate(const Vec2& p) const { return {c * p.x() - s * p.y(), s * p.x() + c * p.y()}; }
+  Vec2 operator()(const Vec2& p) const { return Rotate(p) + Vec2(x, y); }
+  double c, s, x, y;
+};
+
 // Length-weighted direction of a Manhattan line set, modulo pi/2, in
 // (-pi/4, pi/4]: the circular mean of 4 * theta.
 double AxisAngle(const std::vector<std::pair<double, double>>& theta_length) {
@@ -202,10 +210,10 @@ struct PlacedLine {
   AxisSegment seg;  // dir -1: not along an axis under this hypothesis
 };
 
-PlacedLine Place(const RelocalizeOptions& options, const Pose2& t, const LocalLine& l) {
+PlacedLine Place(const RelocalizeOptions& options, const Rigid& t, const LocalLine& l) {
   PlacedLine p;
-  p.a = Transform(t, l.a);
-  p.b = Transform(t, l.b);
+  p.a = t(l.a);
+  p.b = t(l.b);
   AxisSegment& s = p.seg;
   s.dir = Direction(p.a, p.b, options.angle_tolerance_rad);
   if (s.dir < 0) return p;
@@ -213,9 +221,7 @@ PlacedLine Place(const RelocalizeOptions& options, const Pose2& t, const LocalLi
   s.offset = (p.a[k] + p.b[k]) / 2;
   s.lo = std::min(p.a[s.dir], p.b[s.dir]);
   s.hi = std::max(p.a[s.dir], p.b[s.dir]);
-  const double c = std::cos(t.theta), sn = std::sin(t.theta);
-  const Vec2 normal(c * l.normal.x() - sn * l.normal.y(), sn * l.normal.x() + c * l.normal.y());
-  s.side = l.side * Sign(normal[k]);
+  s.side = l.side * Sign(t.Rotate(l.normal)[k]);
   return p;
 }
 
@@ -246,11 +252,11 @@ double Explained(const RelocalizeOptions& options, const SavedMap& saved, const 
   return total;
 }
 
-double Distance(const AxisSegment& m, const Vec2& p) {
+double DistanceSquared(const AxisSegment& m, const Vec2& p) {
   const double along = p[m.dir];
   const double da = std::max({m.lo - along, 0.0, along - m.hi});
   const double dp = p[1 - m.dir] - m.offset;
-  return std::hypot(da, dp);
+  return da * da + dp * dp;
 }
 
 bool Inside(const SavedMap& saved, const Vec2& p, double margin) {
@@ -261,7 +267,8 @@ bool Inside(const SavedMap& saved, const Vec2& p, double margin) {
 double ExplainedOnly(const RelocalizeOptions& options, const SavedMap& saved, const LocalEvidence& local,
                      const Pose2& t, std::vector<std::pair<double, double>>* scratch) {
   double explained = 0;
-  for (const LocalLine& l : local.lines) explained += Explained(options, saved, Place(options, t, l).seg, scratch);
+  const Rigid rigid(t);
+  for (const LocalLine& l : local.lines) explained += Explained(options, saved, Place(options, rigid, l).seg, scratch);
   return explained;
 }
 
@@ -272,8 +279,10 @@ PoseHypothesis Score(const RelocalizeOptions& options, const SavedMap& saved, co
   h.local_to_map = Compose(Pose2{0, 0, saved.axis_rad}, t);
   if (local.evidence_m <= 0) return h;
   std::vector<std::pair<double, double>> intervals;
+  const Rigid rigid(t);
+  const double margin2 = options.free_margin_m * options.free_margin_m;
   for (const LocalLine& l : local.lines) {
-    const PlacedLine p = Place(options, t, l);
+    const PlacedLine p = Place(options, rigid, l);
     h.explained_m += Explained(options, saved, p.seg, &intervals);
     // The unexplained rest: a conflict where it lies in the saved free space.
     const int n = std::max(1, static_cast<int>(std::ceil(l.length / kSampleStepM)));
@@ -289,7 +298,7 @@ PoseHypothesis Score(const RelocalizeOptions& options, const SavedMap& saved, co
       }
       if (!Inside(saved, q, 0)) continue;
       const bool near = std::any_of(saved.segments.begin(), saved.segments.end(), [&](const AxisSegment& m) {
-        return Distance(m, q) <= options.free_margin_m;
+        return DistanceSquared(m, q) <= margin2;
       });
       if (!near) h.conflict_m += w;
     }
@@ -297,7 +306,7 @@ PoseHypothesis Score(const RelocalizeOptions& options, const SavedMap& saved, co
   // The local trajectory through a saved line, or out of the saved room.
   Vec2 prev = Vec2::Zero();
   for (size_t i = 0; i < local.path.size(); ++i) {
-    const Vec2 q = Transform(t, local.path[i]);
+    const Vec2 q = rigid(local.path[i]);
     if (i > 0) {
       if (!Inside(saved, q, options.free_margin_m)) h.conflict_m += (q - prev).norm();
       for (const AxisSegment& m : saved.segments) {
@@ -365,8 +374,9 @@ Pose2 Refine(const RelocalizeOptions& options, const SavedMap& saved, const Loca
     Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
     Eigen::Vector3d b = Eigen::Vector3d::Zero();
     int matched_dirs[2] = {0, 0};
+    const Rigid rigid(t);
     for (const LocalLine& l : local.lines) {
-      const AxisSegment s = Place(options, t, l).seg;
+      const AxisSegment s = Place(options, rigid, l).seg;
       if (s.dir < 0) continue;
       const AxisSegment* best = nullptr;
       double best_overlap = 0;
@@ -383,8 +393,8 @@ Pose2 Refine(const RelocalizeOptions& options, const SavedMap& saved, const Loca
       ++matched_dirs[s.dir];
       const int k = 1 - s.dir;
       for (const Vec2& p : {l.a, l.b}) {
-        const Vec2 q = Transform(t, p);
-        const Vec2 rotated = q - Vec2(t.x, t.y);
+        const Vec2 rotated = rigid.Rotate(p);
+        const Vec2 q = rotated + Vec2(t.x, t.y);
         const Eigen::Vector3d j(k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0, k == 0 ? -rotated.y() : rotated.x());
         const double w = best_overlap / 2;
         a += w * j * j.transpose();
@@ -475,10 +485,10 @@ void Relocalizer::Update(const std::vector<LineFeature>& local_lines,
   std::vector<std::pair<double, double>> scratch;
   for (int r = 0; r < 4; ++r) {
     const double rotation = NormalizeAngle(-local.axis_rad + r * M_PI / 2);
-    const Pose2 turn{0, 0, rotation};
+    const Rigid turn(Pose2{0, 0, rotation});
     std::vector<Vote> votes[2];  // [k]: offsets along coordinate k (from lines with dir 1 - k)
     Vec2 path_mean = Vec2::Zero();
-    for (const Vec2& p : local.path) path_mean += Transform(turn, p) / static_cast<double>(local.path.size());
+    for (const Vec2& p : local.path) path_mean += turn(p) / static_cast<double>(local.path.size());
     for (const LocalLine& l : local.lines) {
       const AxisSegment s = Place(options_, turn, l).seg;
       if (s.dir < 0) continue;

@@ -8,9 +8,10 @@
 // of the constrained matching of Grimson & Lozano-Perez ("Model-based
 // recognition and localization from sparse range or tactile data", IJRR 3(3),
 // 1984: pairings of sensed and model features, pruned by geometric
-// constraints, each surviving interpretation verified) and of the
-// segment-to-segment relocation of Castellanos & Tardos ("Mobile Robot
-// Localization and Map Building: A Multisensor Fusion Approach", 1999, ch. 6),
+// constraints, each surviving interpretation verified) as used for segment
+// maps by Castellanos & Tardos ("Mobile Robot Localization and Map Building:
+// A Multisensor Fusion Approach", Kluwer, 1999: relocation from pairings of
+// observed and mapped segments); here the search is not a tree but votes,
 // specialised to the Manhattan line maps the constrained EKF makes (paper
 // §4: every mapped line is parallel or orthogonal to line 1), so rotation and
 // translation separate:
@@ -44,7 +45,8 @@
 // trajectory points kept (decimated), K = offsets_per_axis, H = max_hypotheses:
 // O(L*P) sides + O(4*L*S*log(L*S)) votes + O(4*K^2*L*S) ranking
 // + O(3*H*(L*(l/0.1 m)*S + P*S)) full scores. No allocation beyond vectors of
-// those sizes. Measured ~? ms for L = 15, S = 80 (see the report in the test).
+// those sizes. Measured (RelWithDebInfo, this 2-core build machine, CPU time):
+// 1.4 ms for L = 13, S = 96, P = 200; 12 ms for L = 40, S = 150 (random lines).
 // Pure: no clock, socket or file.
 #ifndef IRSLAM_SLAM_RELOCALIZER_H_
 #define IRSLAM_SLAM_RELOCALIZER_H_
