@@ -487,6 +487,7 @@ void Relocalizer::Update(const std::vector<LineFeature>& local_lines,
     const double rotation = NormalizeAngle(-local.axis_rad + r * M_PI / 2);
     const Rigid turn(Pose2{0, 0, rotation});
     std::vector<Vote> votes[2];  // [k]: offsets along coordinate k (from lines with dir 1 - k)
+    std::vector<Vote> slides[2];  // [k]: end-to-end alignments along coordinate k (lines with dir k)
     Vec2 path_mean = Vec2::Zero();
     for (const Vec2& p : local.path) path_mean += turn(p) / static_cast<double>(local.path.size());
     for (const LocalLine& l : local.lines) {
@@ -494,13 +495,20 @@ void Relocalizer::Update(const std::vector<LineFeature>& local_lines,
       if (s.dir < 0) continue;
       for (const AxisSegment& m : saved.segments) {
         if (m.dir != s.dir || !SidesAgree(m.side, s.side)) continue;
-        votes[1 - s.dir].push_back({m.offset - s.offset, std::min(s.length(), m.length())});
+        const double w = std::min(s.length(), m.length());
+        votes[1 - s.dir].push_back({m.offset - s.offset, w});
+        slides[s.dir].push_back({m.lo - s.lo, w});
+        slides[s.dir].push_back({m.hi - s.hi, w});
       }
     }
     std::vector<double> offsets[2];
     for (int k = 0; k < 2; ++k) {
       offsets[k] = BestOffsets(std::move(votes[k]), options_.line_tolerance_m, options_.offsets_per_axis);
-      // No line constrains this coordinate: one guess, the saved map's centre (never committed).
+      // No line constrains this coordinate (lines of one direction only, never
+      // committed): the local lines slid along the saved ones, ends aligned.
+      if (offsets[k].empty()) {
+        offsets[k] = BestOffsets(std::move(slides[k]), options_.line_tolerance_m, options_.offsets_per_axis);
+      }
       if (offsets[k].empty()) offsets[k].push_back((saved.min[k] + saved.max[k]) / 2 - path_mean[k]);
     }
     for (double x : offsets[0]) {

@@ -22,9 +22,10 @@
 //    trajectory passed it on: saved trajectory for saved lines, local for
 //    local ones) a 1-D x offset, voted with weight min(lengths) and clustered
 //    within line_tolerance_m; likewise y; the best `offsets_per_axis` of each
-//    axis are combined. An axis without local lines (one wall seen so far)
-//    gets a single guess (the saved map's centre): such a hypothesis is
-//    listed but never committed;
+//    axis are combined. An axis no local line constrains (one wall seen so
+//    far) gets its candidates from the local lines slid along the saved ones
+//    (an end aligned with an end): such hypotheses are listed, never
+//    committed;
 //  - the combinations are ranked by explained length alone, and the best
 //    3 * max_hypotheses distinct ones scored fully (ScoreHypothesis): the
 //    local evidence length lying on saved lines (same direction and side,
