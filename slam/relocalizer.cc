@@ -9,10 +9,10 @@ namespace irslam::slam {
 
 namespace {
 
-constexpr double kSampleStepM = 0.1;   // local lines are checked against free space at this step
-constexpr double kEndSlackM = 0.1;     // saved end points are this uncertain (overlap, crossing)
-constexpr double kSideRangeM = 2.0;    // trajectory points farther from a line do not tell its side
-constexpr double kPathStepM = 0.1;     // local trajectory decimation ...
+constexpr double kSampleStepM = 0.1;  // local lines are checked against free space at this step
+constexpr double kEndSlackM = 0.1;    // saved end points are this uncertain (overlap, crossing)
+constexpr double kSideRangeM = 2.0;   // trajectory points farther from a line do not tell its side
+constexpr double kPathStepM = 0.1;    // local trajectory decimation ...
 constexpr size_t kMaxPathPoints = 200;  // ... and its bound
 
 using Vec2 = Eigen::Vector2d;
@@ -194,7 +194,8 @@ LocalEvidence PrepareLocal(const RelocalizeOptions& options, const std::vector<L
     line.a = l.p0 - (n.dot(l.p0) - l.rho) * n;
     line.b = l.p1 - (n.dot(l.p1) - l.rho) * n;
     line.length = (line.b - line.a).norm();
-    const int dir = Direction(Transform(to_axis, line.a), Transform(to_axis, line.b), options.angle_tolerance_rad);
+    const int dir = Direction(Transform(to_axis, line.a), Transform(to_axis, line.b),
+                              options.angle_tolerance_rad);
     if (dir < 0 || line.length < options.min_line_m) continue;  // not Manhattan in its own frame
     line.side = TrajectorySide(line.a, line.b, n, local.path);
     local.evidence_m += line.length;
@@ -260,21 +261,23 @@ double DistanceSquared(const AxisSegment& m, const Vec2& p) {
 }
 
 bool Inside(const SavedMap& saved, const Vec2& p, double margin) {
-  return p.x() >= saved.min[0] - margin && p.x() <= saved.max[0] + margin && p.y() >= saved.min[1] - margin &&
-         p.y() <= saved.max[1] + margin;
+  return p.x() >= saved.min[0] - margin && p.x() <= saved.max[0] + margin &&
+         p.y() >= saved.min[1] - margin && p.y() <= saved.max[1] + margin;
 }
 
-double ExplainedOnly(const RelocalizeOptions& options, const SavedMap& saved, const LocalEvidence& local,
-                     const Pose2& t, std::vector<std::pair<double, double>>* scratch) {
+double ExplainedOnly(const RelocalizeOptions& options, const SavedMap& saved,
+                     const LocalEvidence& local, const Pose2& t,
+                     std::vector<std::pair<double, double>>* scratch) {
   double explained = 0;
   const Rigid rigid(t);
-  for (const LocalLine& l : local.lines) explained += Explained(options, saved, Place(options, rigid, l).seg, scratch);
+  for (const LocalLine& l : local.lines)
+    explained += Explained(options, saved, Place(options, rigid, l).seg, scratch);
   return explained;
 }
 
 // t: local frame -> saved axis frame.
-PoseHypothesis Score(const RelocalizeOptions& options, const SavedMap& saved, const LocalEvidence& local,
-                     const Pose2& t) {
+PoseHypothesis Score(const RelocalizeOptions& options, const SavedMap& saved,
+                     const LocalEvidence& local, const Pose2& t) {
   PoseHypothesis h;
   h.local_to_map = Compose(Pose2{0, 0, saved.axis_rad}, t);
   if (local.evidence_m <= 0) return h;
@@ -297,9 +300,9 @@ PoseHypothesis Score(const RelocalizeOptions& options, const SavedMap& saved, co
         if (on) continue;
       }
       if (!Inside(saved, q, 0)) continue;
-      const bool near = std::any_of(saved.segments.begin(), saved.segments.end(), [&](const AxisSegment& m) {
-        return DistanceSquared(m, q) <= margin2;
-      });
+      const bool near =
+          std::any_of(saved.segments.begin(), saved.segments.end(),
+                      [&](const AxisSegment& m) { return DistanceSquared(m, q) <= margin2; });
       if (!near) h.conflict_m += w;
     }
   }
@@ -314,7 +317,8 @@ PoseHypothesis Score(const RelocalizeOptions& options, const SavedMap& saved, co
         const double u = prev[k] - m.offset, v = q[k] - m.offset;
         if (!(u * v < 0)) continue;
         const double along = prev[m.dir] + (q[m.dir] - prev[m.dir]) * (u / (u - v));
-        if (along > m.lo + kEndSlackM && along < m.hi - kEndSlackM) h.conflict_m += options.crossing_conflict_m;
+        if (along > m.lo + kEndSlackM && along < m.hi - kEndSlackM)
+          h.conflict_m += options.crossing_conflict_m;
       }
     }
     prev = q;
@@ -331,7 +335,8 @@ struct Vote {
 // The best `count` offsets of a 1-D vote: the heaviest window of width
 // 2 * tolerance, its weighted mean, votes within 2 * tolerance removed, again.
 std::vector<double> BestOffsets(std::vector<Vote> votes, double tolerance, int count) {
-  std::sort(votes.begin(), votes.end(), [](const Vote& a, const Vote& b) { return a.offset < b.offset; });
+  std::sort(votes.begin(), votes.end(),
+            [](const Vote& a, const Vote& b) { return a.offset < b.offset; });
   std::vector<double> out;
   const size_t n = votes.size();
   while (static_cast<int>(out.size()) < count) {
@@ -340,7 +345,8 @@ std::vector<double> BestOffsets(std::vector<Vote> votes, double tolerance, int c
     double window = 0;
     size_t lo = 0, hi = 0;
     for (size_t i = 0; i < n; ++i) {
-      while (hi < n && votes[hi].offset <= votes[i].offset + tolerance) window += votes[hi++].weight;
+      while (hi < n && votes[hi].offset <= votes[i].offset + tolerance)
+        window += votes[hi++].weight;
       while (votes[lo].offset < votes[i].offset - tolerance) window -= votes[lo++].weight;
       if (votes[i].weight > 0 && window > best) {
         best = window;
@@ -369,7 +375,8 @@ std::vector<double> BestOffsets(std::vector<Vote> votes, double tolerance, int c
 // direction and side, within line_tolerance_m), weighted by length. The vote
 // gives the offsets only to the cluster's width and the rotation comes from
 // the axis estimates alone; this uses all matched lines at once.
-Pose2 Refine(const RelocalizeOptions& options, const SavedMap& saved, const LocalEvidence& local, Pose2 t) {
+Pose2 Refine(const RelocalizeOptions& options, const SavedMap& saved, const LocalEvidence& local,
+             Pose2 t) {
   for (int iteration = 0; iteration < 3; ++iteration) {
     Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
     Eigen::Vector3d b = Eigen::Vector3d::Zero();
@@ -383,7 +390,8 @@ Pose2 Refine(const RelocalizeOptions& options, const SavedMap& saved, const Loca
       for (const AxisSegment& m : saved.segments) {
         if (m.dir != s.dir || std::abs(m.offset - s.offset) > options.line_tolerance_m) continue;
         if (!SidesAgree(m.side, s.side)) continue;
-        const double overlap = std::min(s.hi, m.hi + kEndSlackM) - std::max(s.lo, m.lo - kEndSlackM);
+        const double overlap =
+            std::min(s.hi, m.hi + kEndSlackM) - std::max(s.lo, m.lo - kEndSlackM);
         if (overlap > best_overlap) {
           best_overlap = overlap;
           best = &m;
@@ -395,14 +403,16 @@ Pose2 Refine(const RelocalizeOptions& options, const SavedMap& saved, const Loca
       for (const Vec2& p : {l.a, l.b}) {
         const Vec2 rotated = rigid.Rotate(p);
         const Vec2 q = rotated + Vec2(t.x, t.y);
-        const Eigen::Vector3d j(k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0, k == 0 ? -rotated.y() : rotated.x());
+        const Eigen::Vector3d j(k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0,
+                                k == 0 ? -rotated.y() : rotated.x());
         const double w = best_overlap / 2;
         a += w * j * j.transpose();
         b += w * j * (q[k] - best->offset);
       }
     }
     // Both offsets and the rotation need lines of both directions.
-    if (matched_dirs[0] == 0 || matched_dirs[1] == 0 || matched_dirs[0] + matched_dirs[1] < 3) return t;
+    if (matched_dirs[0] == 0 || matched_dirs[1] == 0 || matched_dirs[0] + matched_dirs[1] < 3)
+      return t;
     const Eigen::Vector3d delta = -a.ldlt().solve(b);
     if (!delta.allFinite() || std::abs(delta.z()) > options.angle_tolerance_rad) return t;
     t = {t.x + delta.x(), t.y + delta.y(), NormalizeAngle(t.theta + delta.z())};
@@ -420,23 +430,30 @@ bool SamePose(const RelocalizeOptions& options, const Pose2& a, const Pose2& b) 
 options::Table<RelocalizeOptions> RelocalizeKeys() {
   using R = RelocalizeOptions;
   static constexpr options::Key<R> kKeys[] = {
-      {"min_evidence_m", &R::min_evidence_m, 0, 1000, "m", "local line length needed before any commit"},
+      {"min_evidence_m", &R::min_evidence_m, 0, 1000, "m",
+       "local line length needed before any commit"},
       {"min_line_m", &R::min_line_m, 0, 10, "m", "shorter local lines are not evidence"},
       {"line_tolerance_m", &R::line_tolerance_m, 0.005, 1, "m",
        "a local line lies on a saved one within this offset (also the vote cluster width)"},
       {"angle_tolerance_rad", &R::angle_tolerance_rad, 0.005, 0.78, "rad",
        "a line is along a map axis within this angle"},
-      {"commit_score", &R::commit_score, 0, 1, "", "the committed hypothesis explains at least this fraction ..."},
+      {"commit_score", &R::commit_score, 0, 1, "",
+       "the committed hypothesis explains at least this fraction ..."},
       {"commit_margin", &R::commit_margin, 0, 2, "", "... and this much more than the runner-up"},
-      {"distinct_m", &R::distinct_m, 0.01, 10, "m", "hypotheses nearer than this (and distinct_rad) are one"},
-      {"distinct_rad", &R::distinct_rad, 0.01, 3.2, "rad", "hypotheses turned less than this (and distinct_m) are one"},
-      {"offsets_per_axis", &R::offsets_per_axis, 1, 64, "", "1-D translation candidates kept per axis and rotation"},
+      {"distinct_m", &R::distinct_m, 0.01, 10, "m",
+       "hypotheses nearer than this (and distinct_rad) are one"},
+      {"distinct_rad", &R::distinct_rad, 0.01, 3.2, "rad",
+       "hypotheses turned less than this (and distinct_m) are one"},
+      {"offsets_per_axis", &R::offsets_per_axis, 1, 64, "",
+       "1-D translation candidates kept per axis and rotation"},
       {"max_hypotheses", &R::max_hypotheses, 1, 64, "", "hypotheses kept and reported, best first"},
-      {"max_time_s", &R::max_time_s, 1, 86400, "s", "relocalising longer than this gives up (mission fault)"},
+      {"max_time_s", &R::max_time_s, 1, 86400, "s",
+       "relocalising longer than this gives up (mission fault)"},
       {"min_direction_m", &R::min_direction_m, 0, 100, "m",
        "each of the two directions needs this much local evidence before a commit"},
       {"free_margin_m", &R::free_margin_m, 0.01, 5, "m",
-       "saved free space (conflict): inside the saved map, farther than this from every saved line"},
+       "saved free space (conflict): inside the saved map, farther than this from every saved "
+       "line"},
       {"crossing_conflict_m", &R::crossing_conflict_m, 0, 100, "m",
        "conflict counted for each saved line the local trajectory crosses"},
   };
@@ -450,7 +467,8 @@ PoseHypothesis ScoreHypothesis(const RelocalizeOptions& options, const Pose2& lo
                                const std::vector<TimedPose>& local_trajectory) {
   const SavedMap saved = PrepareSaved(options, saved_lines, saved_trajectory);
   const LocalEvidence local = PrepareLocal(options, local_lines, local_trajectory);
-  PoseHypothesis h = Score(options, saved, local, Compose(Pose2{0, 0, -saved.axis_rad}, local_to_map));
+  PoseHypothesis h =
+      Score(options, saved, local, Compose(Pose2{0, 0, -saved.axis_rad}, local_to_map));
   h.local_to_map = local_to_map;
   return h;
 }
@@ -460,12 +478,13 @@ Relocalizer::Relocalizer(RelocalizeOptions options, std::vector<LineFeature> sav
     : options_(options),
       saved_lines_(std::move(saved_lines)),
       saved_trajectory_(std::move(saved_trajectory)),
-      saved_(std::make_shared<const SavedMap>(PrepareSaved(options_, saved_lines_, saved_trajectory_))) {}
+      saved_(std::make_shared<const SavedMap>(
+          PrepareSaved(options_, saved_lines_, saved_trajectory_))) {}
 
 bool Relocalizer::both_directions() const {
   return evidence_by_direction_m_[0] >= options_.min_direction_m &&
-         evidence_by_direction_m_[1] >= options_.min_direction_m && evidence_by_direction_m_[0] > 0 &&
-         evidence_by_direction_m_[1] > 0;
+         evidence_by_direction_m_[1] >= options_.min_direction_m &&
+         evidence_by_direction_m_[0] > 0 && evidence_by_direction_m_[1] > 0;
 }
 
 void Relocalizer::Update(const std::vector<LineFeature>& local_lines,
@@ -487,7 +506,8 @@ void Relocalizer::Update(const std::vector<LineFeature>& local_lines,
     const double rotation = NormalizeAngle(-local.axis_rad + r * M_PI / 2);
     const Rigid turn(Pose2{0, 0, rotation});
     std::vector<Vote> votes[2];  // [k]: offsets along coordinate k (from lines with dir 1 - k)
-    std::vector<Vote> slides[2];  // [k]: end-to-end alignments along coordinate k (lines with dir k)
+    std::vector<Vote>
+        slides[2];  // [k]: end-to-end alignments along coordinate k (lines with dir k)
     Vec2 path_mean = Vec2::Zero();
     for (const Vec2& p : local.path) path_mean += turn(p) / static_cast<double>(local.path.size());
     for (const LocalLine& l : local.lines) {
@@ -503,13 +523,16 @@ void Relocalizer::Update(const std::vector<LineFeature>& local_lines,
     }
     std::vector<double> offsets[2];
     for (int k = 0; k < 2; ++k) {
-      offsets[k] = BestOffsets(std::move(votes[k]), options_.line_tolerance_m, options_.offsets_per_axis);
+      offsets[k] =
+          BestOffsets(std::move(votes[k]), options_.line_tolerance_m, options_.offsets_per_axis);
       // No line constrains this coordinate (lines of one direction only, never
       // committed): the local lines slid along the saved ones, ends aligned.
       if (offsets[k].empty()) {
-        offsets[k] = BestOffsets(std::move(slides[k]), options_.line_tolerance_m, options_.offsets_per_axis);
+        offsets[k] =
+            BestOffsets(std::move(slides[k]), options_.line_tolerance_m, options_.offsets_per_axis);
       }
-      if (offsets[k].empty()) offsets[k].push_back((saved.min[k] + saved.max[k]) / 2 - path_mean[k]);
+      if (offsets[k].empty())
+        offsets[k].push_back((saved.min[k] + saved.max[k]) / 2 - path_mean[k]);
     }
     for (double x : offsets[0]) {
       for (double y : offsets[1]) {
@@ -518,22 +541,25 @@ void Relocalizer::Update(const std::vector<LineFeature>& local_lines,
       }
     }
   }
-  std::stable_sort(candidates.begin(), candidates.end(),
-                   [](const Candidate& a, const Candidate& b) { return a.explained > b.explained; });
+  std::stable_sort(
+      candidates.begin(), candidates.end(),
+      [](const Candidate& a, const Candidate& b) { return a.explained > b.explained; });
   // The best distinct candidates by explained length are scored fully.
   const size_t to_score = 3 * static_cast<size_t>(options_.max_hypotheses);
   std::vector<Pose2> chosen;
   for (const Candidate& c : candidates) {
     if (chosen.size() >= to_score) break;
-    if (std::none_of(chosen.begin(), chosen.end(), [&](const Pose2& p) { return SamePose(options_, p, c.t); })) {
+    if (std::none_of(chosen.begin(), chosen.end(),
+                     [&](const Pose2& p) { return SamePose(options_, p, c.t); })) {
       chosen.push_back(c.t);
     }
   }
   std::vector<PoseHypothesis> scored;
   scored.reserve(chosen.size());
   for (const Pose2& t : chosen) scored.push_back(Score(options_, saved, local, t));
-  std::stable_sort(scored.begin(), scored.end(),
-                   [](const PoseHypothesis& a, const PoseHypothesis& b) { return a.score > b.score; });
+  std::stable_sort(
+      scored.begin(), scored.end(),
+      [](const PoseHypothesis& a, const PoseHypothesis& b) { return a.score > b.score; });
   for (const PoseHypothesis& h : scored) {
     if (static_cast<int>(hypotheses_.size()) >= options_.max_hypotheses) break;
     if (std::none_of(hypotheses_.begin(), hypotheses_.end(), [&](const PoseHypothesis& k) {
@@ -542,22 +568,35 @@ void Relocalizer::Update(const std::vector<LineFeature>& local_lines,
       hypotheses_.push_back(h);
     }
   }
-  // The kept ones refined (kept when that does not lower the score).
+  // The kept ones refined (unless that lowers the score by more than a
+  // rounding of the explained intervals), and those that met merged again.
   const Pose2 to_axis{0, 0, -saved.axis_rad};
   for (PoseHypothesis& h : hypotheses_) {
     const Pose2 refined = Refine(options_, saved, local, Compose(to_axis, h.local_to_map));
     const PoseHypothesis r = Score(options_, saved, local, refined);
     if (r.score >= h.score - 0.02) h = r;
   }
-  std::stable_sort(hypotheses_.begin(), hypotheses_.end(),
-                   [](const PoseHypothesis& a, const PoseHypothesis& b) { return a.score > b.score; });
+  std::stable_sort(
+      hypotheses_.begin(), hypotheses_.end(),
+      [](const PoseHypothesis& a, const PoseHypothesis& b) { return a.score > b.score; });
+  std::vector<PoseHypothesis> distinct;
+  for (const PoseHypothesis& h : hypotheses_) {
+    if (std::none_of(distinct.begin(), distinct.end(), [&](const PoseHypothesis& k) {
+          return SamePose(options_, k.local_to_map, h.local_to_map);
+        })) {
+      distinct.push_back(h);
+    }
+  }
+  hypotheses_ = std::move(distinct);
 }
 
 std::optional<PoseHypothesis> Relocalizer::Decision() const {
-  if (hypotheses_.empty() || evidence_m_ < options_.min_evidence_m || !both_directions()) return std::nullopt;
+  if (hypotheses_.empty() || evidence_m_ < options_.min_evidence_m || !both_directions())
+    return std::nullopt;
   const PoseHypothesis& best = hypotheses_[0];
   const double second = hypotheses_.size() > 1 ? hypotheses_[1].score : 0.0;
-  if (best.score < options_.commit_score || best.score - second < options_.commit_margin) return std::nullopt;
+  if (best.score < options_.commit_score || best.score - second < options_.commit_margin)
+    return std::nullopt;
   return best;
 }
 

@@ -68,28 +68,28 @@ struct SavedMap;  // relocalizer.cc
 }
 
 struct RelocalizeOptions {
-  double min_evidence_m = 2.0;       // local line length needed before any commit
-  double min_line_m = 0.25;          // shorter local lines are not evidence
-  double line_tolerance_m = 0.08;    // offset of a transformed local line from a saved one
-  double angle_tolerance_rad = 0.12; // direction of a local line from a map axis
-  double commit_score = 0.75;        // best hypothesis explains at least this fraction ...
-  double commit_margin = 0.2;        // ... and this much more than the runner-up
-  double distinct_m = 0.25;          // hypotheses nearer than this (and distinct_rad) are one
+  double min_evidence_m = 2.0;        // local line length needed before any commit
+  double min_line_m = 0.25;           // shorter local lines are not evidence
+  double line_tolerance_m = 0.08;     // offset of a transformed local line from a saved one
+  double angle_tolerance_rad = 0.12;  // direction of a local line from a map axis
+  double commit_score = 0.75;         // best hypothesis explains at least this fraction ...
+  double commit_margin = 0.2;         // ... and this much more than the runner-up
+  double distinct_m = 0.25;           // hypotheses nearer than this (and distinct_rad) are one
   double distinct_rad = 0.2;
   int offsets_per_axis = 8;          // 1-D translation candidates kept per axis and rotation
   int max_hypotheses = 8;            // kept and reported, best first
   double max_time_s = 180;           // relocalising longer than this gives up (mission: fault)
-  double min_direction_m = 0.5;      // each of the two directions needs this much evidence to commit
-  double free_margin_m = 0.3;        // saved free space: farther than this from every saved line
-  double crossing_conflict_m = 0.5;  // conflict per crossing of a saved line by the local trajectory
+  double min_direction_m = 0.5;      // evidence needed in each of the two directions to commit
+  double free_margin_m = 0.3;        // saved free space: farther than this from all saved lines
+  double crossing_conflict_m = 0.5;  // conflict per saved line the local trajectory crosses
 };
 options::Table<RelocalizeOptions> RelocalizeKeys();  // [relocalize]
 
 struct PoseHypothesis {
-  Pose2 local_to_map;     // a pose in the local frame -> the saved map frame
-  double score = 0;       // explained_m - conflict_m, over the evidence length: <= 1
-  double explained_m = 0; // evidence length lying on saved lines
-  double conflict_m = 0;  // evidence contradicting the saved map
+  Pose2 local_to_map;      // a pose in the local frame -> the saved map frame
+  double score = 0;        // explained_m - conflict_m, over the evidence length: <= 1
+  double explained_m = 0;  // evidence length lying on saved lines
+  double conflict_m = 0;   // evidence contradicting the saved map
 };
 
 // The local SLAM's lines and trajectory (its internal frame) scored against a

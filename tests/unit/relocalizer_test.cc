@@ -65,7 +65,8 @@ struct World {
     std::vector<LineFeature> lines;
     auto add = [&](const std::vector<Vec2>& poly) {
       for (size_t i = 0; i < poly.size(); ++i) {
-        lines.push_back(MakeLine(static_cast<int>(lines.size()) + 1, poly[i], poly[(i + 1) % poly.size()]));
+        lines.push_back(
+            MakeLine(static_cast<int>(lines.size()) + 1, poly[i], poly[(i + 1) % poly.size()]));
       }
     };
     add(contour);
@@ -113,8 +114,8 @@ struct Evidence {
   std::vector<TimedPose> trajectory;
 };
 
-Evidence Walk(const World& world, const Pose2& local_to_map, double s0, double length, uint32_t seed,
-              double noise_m = 0.01, double noise_rad = 0.5 * M_PI / 180) {
+Evidence Walk(const World& world, const Pose2& local_to_map, double s0, double length,
+              uint32_t seed, double noise_m = 0.01, double noise_rad = 0.5 * M_PI / 180) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> offset_noise(0, noise_m), angle_noise(0, noise_rad);
   const std::vector<Vec2> path = Offset(world.contour, kFollowM);
@@ -137,13 +138,16 @@ Evidence Walk(const World& world, const Pose2& local_to_map, double s0, double l
       for (double s = from; s < to; s += 0.05) {
         const Vec2 p = a + d * (s - e0);
         const Pose2 map_pose{p.x(), p.y(), std::atan2(d.y(), d.x())};
-        ev.trajectory.push_back({0.25 * static_cast<double>(ev.trajectory.size()), Compose(to_local, map_pose)});
+        ev.trajectory.push_back(
+            {0.25 * static_cast<double>(ev.trajectory.size()), Compose(to_local, map_pose)});
       }
       // The wall beside it, clipped to the wall edge.
       const Vec2 w0 = world.contour[i], w1 = world.contour[(i + 1) % n];
       const double wl = (w1 - w0).norm();
-      const Vec2 pa = a + d * (from - e0) - kFollowM * inward, pb = a + d * (to - e0) - kFollowM * inward;
-      const double ta = std::clamp(d.dot(pa - w0), 0.0, wl), tb = std::clamp(d.dot(pb - w0), 0.0, wl);
+      const Vec2 pa = a + d * (from - e0) - kFollowM * inward,
+                 pb = a + d * (to - e0) - kFollowM * inward;
+      const double ta = std::clamp(d.dot(pa - w0), 0.0, wl),
+                   tb = std::clamp(d.dot(pb - w0), 0.0, wl);
       if (tb - ta < 0.3) continue;
       Vec2 q0 = w0 + d * ta, q1 = w0 + d * tb;
       // Noise: turned about the middle, shifted along the normal. The angle of
@@ -154,7 +158,8 @@ Evidence Walk(const World& world, const Pose2& local_to_map, double s0, double l
       const Vec2 half = Apply(noise, (q1 - q0) / 2);
       q0 = mid - half;
       q1 = mid + half;
-      ev.lines.push_back(MakeLine(static_cast<int>(ev.lines.size()) + 1, Apply(to_local, q0), Apply(to_local, q1)));
+      ev.lines.push_back(MakeLine(static_cast<int>(ev.lines.size()) + 1, Apply(to_local, q0),
+                                  Apply(to_local, q1)));
     }
   }
   return ev;
@@ -167,21 +172,24 @@ double Perimeter(const World& world) {
   return p;
 }
 
-void ExpectPose(const Pose2& got, const Pose2& want, double tol_m = 0.03, double tol_rad = M_PI / 180) {
+void ExpectPose(const Pose2& got, const Pose2& want, double tol_m = 0.03,
+                double tol_rad = M_PI / 180) {
   EXPECT_NEAR(got.x, want.x, tol_m);
   EXPECT_NEAR(got.y, want.y, tol_m);
   EXPECT_NEAR(NormalizeAngle(got.theta - want.theta), 0, tol_rad);
 }
 
 bool Near(const Pose2& a, const Pose2& b, double tol_m = 0.03, double tol_rad = M_PI / 180) {
-  return std::hypot(a.x - b.x, a.y - b.y) < tol_m && std::abs(NormalizeAngle(a.theta - b.theta)) < tol_rad;
+  return std::hypot(a.x - b.x, a.y - b.y) < tol_m &&
+         std::abs(NormalizeAngle(a.theta - b.theta)) < tol_rad;
 }
 
 TEST(RelocalizerTest, MakeLineIsConsistent) {
   const LineFeature l = MakeLine(1, {1, 2}, {3, 2});
   EXPECT_NEAR(l.rho, 2, 1e-12);
   EXPECT_NEAR(l.theta, M_PI / 2, 1e-12);
-  for (const Vec2& p : {l.p0, l.p1}) EXPECT_NEAR(p.dot(Vec2(std::cos(l.theta), std::sin(l.theta))), l.rho, 1e-12);
+  for (const Vec2& p : {l.p0, l.p1})
+    EXPECT_NEAR(p.dot(Vec2(std::cos(l.theta), std::sin(l.theta))), l.rho, 1e-12);
 }
 
 // Case 1: a room whose furniture or shape breaks the symmetry is solved, for
@@ -197,7 +205,8 @@ void ExpectSolved(const World& world, double walk_m, uint32_t seed0) {
     const double s0 = start(rng);
     const Evidence at_start = Walk(world, {}, s0, 0.01, 0);
     const Pose2& p = at_start.trajectory.front().pose;
-    const Pose2 truth{p.x + near(rng), p.y + near(rng), NormalizeAngle(-M_PI + (i + 0.5) * M_PI / 4 + jitter(rng))};
+    const Pose2 truth{p.x + near(rng), p.y + near(rng),
+                      NormalizeAngle(-M_PI + (i + 0.5) * M_PI / 4 + jitter(rng))};
     std::optional<PoseHypothesis> decision;
     double committed_at = -1;
     for (double walked = 1; walked <= walk_m + 1e-9; walked += 1) {
@@ -207,21 +216,25 @@ void ExpectSolved(const World& world, double walk_m, uint32_t seed0) {
       const auto d = reloc.Decision();
       if (d) {
         EXPECT_TRUE(Near(d->local_to_map, truth))
-            << "wrong commit after " << walked << " m: " << d->local_to_map.x << " " << d->local_to_map.y << " "
-            << d->local_to_map.theta << " truth " << truth.x << " " << truth.y << " " << truth.theta;
+            << "wrong commit after " << walked << " m: " << d->local_to_map.x << " "
+            << d->local_to_map.y << " " << d->local_to_map.theta << " truth " << truth.x << " "
+            << truth.y << " " << truth.theta;
         if (!decision) committed_at = walked;
         decision = d;
       }
     }
-    ASSERT_TRUE(decision.has_value()) << "no commit; best " << reloc.hypotheses()[0].score << " second "
-                                      << (reloc.hypotheses().size() > 1 ? reloc.hypotheses()[1].score : 0);
+    ASSERT_TRUE(decision.has_value())
+        << "no commit; best " << reloc.hypotheses()[0].score << " second "
+        << (reloc.hypotheses().size() > 1 ? reloc.hypotheses()[1].score : 0);
     ExpectPose(decision->local_to_map, truth);
     EXPECT_GT(decision->score, 0.85);
     EXPECT_GT(committed_at, 1.9);  // min_evidence_m
   }
 }
 
-TEST(RelocalizerTest, FindsThePoseInARoomWithAWallContactObject) { ExpectSolved(RoomWithBox(), 14, 11); }
+TEST(RelocalizerTest, FindsThePoseInARoomWithAWallContactObject) {
+  ExpectSolved(RoomWithBox(), 14, 11);
+}
 
 TEST(RelocalizerTest, FindsThePoseInAnLShapedRoom) { ExpectSolved(LRoom(), 14, 23); }
 
@@ -272,7 +285,8 @@ TEST(RelocalizerTest, BareRectangleStaysAmbiguous) {
 
 // ... and a wall-contact object breaks the symmetry once it has been seen.
 TEST(RelocalizerTest, WallContactObjectBreaksTheRectanglesSymmetry) {
-  const World world{{{0, 0}, {4, 0}, {4, 3.5}, {3.4, 3.5}, {3.4, 4.3}, {4, 4.3}, {4, 5.5}, {0, 5.5}}, {}};
+  const World world{
+      {{0, 0}, {4, 0}, {4, 3.5}, {3.4, 3.5}, {3.4, 4.3}, {4, 4.3}, {4, 5.5}, {0, 5.5}}, {}};
   Relocalizer reloc({}, world.Lines(), world.Trajectory());
   const Pose2 truth{-3.0, 0.7, -0.6};
   // Bottom wall from x = 2, the corner, the right wall up to y ~ 3.1: ambiguous.
@@ -307,7 +321,8 @@ TEST(RelocalizerTest, SquareRoomNeverCommits) {
   int found = 0;
   for (int k = 0; k < 4; ++k) {
     const Pose2 about_centre = Compose(Compose({2, 2, k * M_PI / 2}, {-2, -2, 0}), truth);
-    for (size_t i = 0; i < 4; ++i) found += Near(reloc.hypotheses()[i].local_to_map, about_centre) ? 1 : 0;
+    for (size_t i = 0; i < 4; ++i)
+      found += Near(reloc.hypotheses()[i].local_to_map, about_centre) ? 1 : 0;
   }
   EXPECT_EQ(found, 4);
 }
@@ -358,7 +373,8 @@ TEST(RelocalizerTest, OneDirectionIsNotCommittedWhateverTheThresholds) {
 // Case 5: evidence from another room: the map disagrees, nothing is committed.
 TEST(RelocalizerTest, EvidenceFromAnotherRoomIsNotCommitted) {
   const World saved = LRoom();
-  const World other{{{0, 0}, {2.5, 0}, {2.5, 1.0}, {2.0, 1.0}, {2.0, 1.6}, {2.5, 1.6}, {2.5, 2.5}, {0, 2.5}}, {}};
+  const World other{
+      {{0, 0}, {2.5, 0}, {2.5, 1.0}, {2.0, 1.0}, {2.0, 1.6}, {2.5, 1.6}, {2.5, 2.5}, {0, 2.5}}, {}};
   Relocalizer reloc({}, saved.Lines(), saved.Trajectory());
   for (int i = 0; i < 4; ++i) {
     const Pose2 truth{0.5 * i, -1.0 * i, -2.5 + 1.4 * i};
@@ -380,14 +396,16 @@ TEST(RelocalizerTest, ScoreHypothesisExplainsTheTruthAndNotAShiftedPose) {
   const RelocalizeOptions options;
   const auto lines = world.Lines();
   const auto saved_trajectory = world.Trajectory();
-  const PoseHypothesis right = ScoreHypothesis(options, truth, lines, saved_trajectory, ev.lines, ev.trajectory);
+  const PoseHypothesis right =
+      ScoreHypothesis(options, truth, lines, saved_trajectory, ev.lines, ev.trajectory);
   EXPECT_GT(right.score, 0.9);
   EXPECT_LT(right.conflict_m, 0.1);
   EXPECT_GT(right.explained_m, 0.9 * (Perimeter(world) - 2));
   ExpectPose(right.local_to_map, truth, 1e-12, 1e-12);
 
   const Pose2 shifted = Compose({0.5, 0, 0}, truth);  // 0.5 m along the map's x
-  const PoseHypothesis wrong = ScoreHypothesis(options, shifted, lines, saved_trajectory, ev.lines, ev.trajectory);
+  const PoseHypothesis wrong =
+      ScoreHypothesis(options, shifted, lines, saved_trajectory, ev.lines, ev.trajectory);
   EXPECT_LT(wrong.score, 0.5);
   EXPECT_GT(wrong.conflict_m, 1.0);  // the trajectory crosses the right wall, lines in free space
 
@@ -395,7 +413,8 @@ TEST(RelocalizerTest, ScoreHypothesisExplainsTheTruthAndNotAShiftedPose) {
   Evidence through = ev;
   const Pose2 to_local = Inverse(truth);
   for (double y : {0.3, -0.4, 0.3}) {
-    through.trajectory.push_back({through.trajectory.back().t + 1, Compose(to_local, {2.0, y, -M_PI / 2})});
+    through.trajectory.push_back(
+        {through.trajectory.back().t + 1, Compose(to_local, {2.0, y, -M_PI / 2})});
   }
   const PoseHypothesis crossed =
       ScoreHypothesis(options, truth, lines, saved_trajectory, through.lines, through.trajectory);
@@ -431,10 +450,12 @@ TEST(RelocalizerTest, LinesSeenFromTheOtherSideAreNotExplained) {
     outside.push_back({x, {x, -0.3, 0}});
   }
   const Pose2 identity{};
-  EXPECT_NEAR(ScoreHypothesis(options, identity, world.Lines(), world.Trajectory(), local, inside).explained_m, 3.0,
-              1e-6);
-  EXPECT_NEAR(ScoreHypothesis(options, identity, world.Lines(), world.Trajectory(), local, outside).explained_m, 0,
-              1e-9);
+  EXPECT_NEAR(ScoreHypothesis(options, identity, world.Lines(), world.Trajectory(), local, inside)
+                  .explained_m,
+              3.0, 1e-6);
+  EXPECT_NEAR(ScoreHypothesis(options, identity, world.Lines(), world.Trajectory(), local, outside)
+                  .explained_m,
+              0, 1e-9);
 }
 
 // Case 7: bounded output on a large problem.
@@ -447,7 +468,8 @@ TEST(RelocalizerTest, LargeProblemKeepsAtMostMaxHypotheses) {
     for (int i = 0; i < n; ++i) {
       const Vec2 a(pos(rng), pos(rng));
       const double l = len(rng);
-      const Vec2 d = along_x(rng) ? Vec2(std::cos(turn), std::sin(turn)) : Vec2(-std::sin(turn), std::cos(turn));
+      const Vec2 d = along_x(rng) ? Vec2(std::cos(turn), std::sin(turn))
+                                  : Vec2(-std::sin(turn), std::cos(turn));
       lines.push_back(MakeLine(i + 1, a, a + l * d));
     }
     return lines;
