@@ -439,7 +439,10 @@ options::Table<RelocalizeOptions> RelocalizeKeys() {
        "a line is along a map axis within this angle"},
       {"commit_score", &R::commit_score, 0, 1, "",
        "the committed hypothesis explains at least this fraction ..."},
-      {"commit_margin", &R::commit_margin, 0, 2, "", "... and this much more than the runner-up"},
+      {"commit_margin", &R::commit_margin, 0, 2, "",
+       "... and this much more than the runner-up ..."},
+      {"margin_evidence_m", &R::margin_evidence_m, 0.1, 1000, "m",
+       "... over at most this much evidence (then a fixed length: not diluted by a long walk)"},
       {"distinct_m", &R::distinct_m, 0.01, 10, "m",
        "hypotheses nearer than this (and distinct_rad) are one"},
       {"distinct_rad", &R::distinct_rad, 0.01, 3.2, "rad",
@@ -595,8 +598,11 @@ std::optional<PoseHypothesis> Relocalizer::Decision() const {
     return std::nullopt;
   const PoseHypothesis& best = hypotheses_[0];
   const double second = hypotheses_.size() > 1 ? hypotheses_[1].score : 0.0;
-  if (best.score < options_.commit_score || best.score - second < options_.commit_margin)
-    return std::nullopt;
+  // The runner-up beaten by a length: a fraction of the evidence up to margin_evidence_m.
+  const double beats_m = (best.score - second) * evidence_m_;
+  const double needed_m =
+      options_.commit_margin * std::min(evidence_m_, options_.margin_evidence_m);
+  if (best.score < options_.commit_score || beats_m < needed_m) return std::nullopt;
   return best;
 }
 

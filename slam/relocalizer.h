@@ -73,7 +73,8 @@ struct RelocalizeOptions {
   double line_tolerance_m = 0.08;     // offset of a transformed local line from a saved one
   double angle_tolerance_rad = 0.12;  // direction of a local line from a map axis
   double commit_score = 0.75;         // best hypothesis explains at least this fraction ...
-  double commit_margin = 0.2;         // ... and this much more than the runner-up
+  double commit_margin = 0.2;         // ... and this much more than the runner-up ...
+  double margin_evidence_m = 5.0;     // ... over at most this much evidence (see Decision)
   double distinct_m = 0.25;           // hypotheses nearer than this (and distinct_rad) are one
   double distinct_rad = 0.2;
   int offsets_per_axis = 8;          // 1-D translation candidates kept per axis and rotation
@@ -114,7 +115,12 @@ class Relocalizer {
               const std::vector<TimedPose>& local_trajectory);
 
   const std::vector<PoseHypothesis>& hypotheses() const { return hypotheses_; }  // best first
-  // The hypothesis to commit to, when one is clearly best (see the options).
+  // The hypothesis to commit to, when one is clearly best: evidence_m >=
+  // min_evidence_m, both_directions(), best.score >= commit_score, and the
+  // length by which it beats the runner-up ((best.score - second.score) *
+  // evidence_m) at least commit_margin * min(evidence_m, margin_evidence_m):
+  // a fraction of the evidence at first, then a fixed length, so that a small
+  // asymmetry (one object in a large room) is not diluted by a long walk.
   std::optional<PoseHypothesis> Decision() const;
   double evidence_m() const { return evidence_m_; }
   // Evidence length along each of the local map's two axes (in no particular

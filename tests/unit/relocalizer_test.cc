@@ -258,6 +258,36 @@ TEST(RelocalizerTest, SavedMapAFewDegreesOffAxis) {
   ExpectPose(d->local_to_map, Compose(map_from_world, truth));
 }
 
+// Without the saved trajectory the sides of the saved lines are unknown (either
+// side matches): the shape alone still decides.
+TEST(RelocalizerTest, FindsThePoseWithoutTheSavedTrajectory) {
+  const World world = LRoom();
+  Relocalizer reloc({}, world.Lines(), {});
+  const Pose2 truth{4.1, 2.2, 2.9};
+  const Evidence ev = Walk(world, truth, 6.0, 14, 27);
+  reloc.Update(ev.lines, ev.trajectory);
+  const auto d = reloc.Decision();
+  ASSERT_TRUE(d.has_value());
+  ExpectPose(d->local_to_map, truth);
+}
+
+// Something the saved map does not have (a chair moved in since) costs score
+// but does not prevent the commit.
+TEST(RelocalizerTest, AnUnmappedObjectIsTolerated) {
+  const World world = RoomWithBox();
+  Relocalizer reloc({}, world.Lines(), world.Trajectory());
+  const Pose2 truth{0.8, 4.5, -2.0};
+  Evidence ev = Walk(world, truth, 9.0, 14, 29);
+  const Pose2 to_local = Inverse(truth);
+  ev.lines.push_back(MakeLine(50, Apply(to_local, {2.6, 1.2}), Apply(to_local, {3.0, 1.2})));
+  ev.lines.push_back(MakeLine(51, Apply(to_local, {2.6, 1.2}), Apply(to_local, {2.6, 1.6})));
+  reloc.Update(ev.lines, ev.trajectory);
+  const auto d = reloc.Decision();
+  ASSERT_TRUE(d.has_value());
+  ExpectPose(d->local_to_map, truth);
+  EXPECT_NEAR(d->conflict_m, 0.8, 0.1);  // both chair sides in free space
+}
+
 // Case 2: a bare rectangle is two-fold symmetric: two walls and a corner (or
 // the whole room) leave it ambiguous.
 TEST(RelocalizerTest, BareRectangleStaysAmbiguous) {
@@ -505,7 +535,7 @@ TEST(RelocalizerTest, NoEvidenceNoHypotheses) {
 
 TEST(RelocalizerTest, KeysHaveTheirDefaultsWithinBounds) {
   const RelocalizeOptions defaults;
-  EXPECT_EQ(RelocalizeKeys().size(), 14u);
+  EXPECT_EQ(RelocalizeKeys().size(), 15u);
   for (const auto& key : RelocalizeKeys()) {
     SCOPED_TRACE(std::string(key.name));
     EXPECT_FALSE(key.doc.empty());
