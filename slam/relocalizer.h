@@ -76,13 +76,13 @@ struct RelocalizeOptions {
   double commit_margin = 0.2;         // ... and this much more than the runner-up ...
   double margin_evidence_m = 5.0;     // ... over at most this much evidence (see Decision)
   double distinct_m = 0.25;           // hypotheses nearer than this (and distinct_rad) are one
-  double distinct_rad = 0.2;
-  int offsets_per_axis = 8;          // 1-D translation candidates kept per axis and rotation
-  int max_hypotheses = 8;            // kept and reported, best first
-  double max_time_s = 180;           // relocalising longer than this gives up (mission: fault)
-  double min_direction_m = 0.5;      // evidence needed in each of the two directions to commit
-  double free_margin_m = 0.3;        // saved free space: farther than this from all saved lines
-  double crossing_conflict_m = 0.5;  // conflict per saved line the local trajectory crosses
+  double distinct_rad = 0.2;          // ... and turned less than this
+  int offsets_per_axis = 8;           // 1-D translation candidates kept per axis and rotation
+  int max_hypotheses = 8;             // kept and reported, best first
+  double max_time_s = 180;            // relocalising longer than this gives up (mission: fault)
+  double min_direction_m = 0.5;       // evidence needed in each of the two directions to commit
+  double free_margin_m = 0.3;         // saved free space: farther than this from all saved lines
+  double crossing_conflict_m = 0.5;   // conflict per saved line the local trajectory crosses
 };
 options::Table<RelocalizeOptions> RelocalizeKeys();  // [relocalize]
 
