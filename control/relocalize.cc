@@ -53,8 +53,13 @@ bool MapAgreement::Step(const slam::Slam& slam) {
   if (s.windows == last_.windows) return true;
   // Association outcome of the windows closed since the last call: matched
   // (EKF updates) against what the map did not explain (new lines, gate rejections).
+  // Collinear pieces of mapped lines (tied or declined) are the map seen
+  // again in part and are not counted against it; a line with no mapped line
+  // near it, one the gate rejects, or one at an angle the map does not have is.
+  const int plain_new = (s.insertions - last_.insertions) - (s.collinear_insertions - last_.collinear_insertions) -
+                        (s.collinear_declined - last_.collinear_declined);
   windows_.push_back({s.updates - last_.updates,
-                      (s.insertions - last_.insertions) + (s.rejected_gate - last_.rejected_gate)});
+                      plain_new + (s.rejected_gate - last_.rejected_gate) + (s.rejected_angle - last_.rejected_angle)});
   last_ = s;
   const size_t keep = static_cast<size_t>(options_.check_windows);
   if (windows_.size() > keep) windows_.pop_front();

@@ -8,8 +8,9 @@
 // the SLAM to adopt the saved map (Slam::AdoptMap) and carries on in its frame.
 //
 // MapAgreement: after the commit, every closed window's association outcome
-// (lines matched to the map vs lines the map did not explain: inserted anew or
-// rejected by the innovation gate) is kept over the last `check_windows`
+// (lines matched to the map vs lines the map did not explain: inserted with no
+// mapped line near them, rejected by the innovation gate, or at an angle the
+// map does not have; collinear pieces of mapped lines count for neither) is kept over the last `check_windows`
 // windows. In a known room nearly every line matches; when most do not, the
 // map disagrees (the robot was carried elsewhere, or the commit was wrong):
 // the mission relocalises again in the map as it was `check_windows` windows
@@ -33,8 +34,8 @@ namespace irslam::control {
 
 struct RelocalizeOptions {
   slam::RelocalizeOptions search;  // [relocalize] (the line-correspondence search)
-  int check_windows = 8;           // windows judged together after the commit
-  int min_lines_judged = 6;        // ... once they hold at least this many lines
+  int check_windows = 12;          // windows judged together after the commit
+  int min_lines_judged = 8;        // ... once they hold at least this many lines
   double min_agreement = 0.3;      // matched share below this: the map disagrees
   int max_attempts = 5;            // relocalisations in one mission before giving the map up
 };

@@ -76,7 +76,9 @@ RelocResult Relocalise(const sim::World& world, const Made& made, const Pose2& s
   sim::World w = world;
   w.start = start;
   RelocResult r;
+  std::optional<slam::SlamStats> s0;
   const auto on_tick = [&](const sim::InProcessRun& run) {
+    if (!s0 && run.core->state() == control::MissionState::kClean) s0 = run.core->slam().stats();
     const auto st = run.core->Status(run.t);
     if (!st.relocalize || !st.relocalize->committed || !run.core->slam().in_saved_map()) return;
     const Pose2 est = Compose(made.world_from_map, run.core->slam().map_pose());
@@ -102,7 +104,15 @@ RelocResult Relocalise(const sim::World& world, const Made& made, const Pose2& s
   };
   robot::CoreOptions options = robot::DefaultCoreOptions();
   if (clean) options.mission.mode = "clean";
+  if (std::getenv("RELOC_NOCHECK")) options.mission.relocalize.min_agreement = 0;
   sim::InProcessRun run = sim::RunInProcess(w, options, seed, max_time_s, on_tick, nullptr, nullptr, made.map);
+  if (s0 && std::getenv("RELOC_DEBUG")) {
+    const auto& s = run.core->slam().stats();
+    std::printf("reloc clean: windows %d ins %d coll %d declined %d upd %d gate %d angle %d; lines %zu\n",
+                s.windows - s0->windows, s.insertions - s0->insertions, s.collinear_insertions - s0->collinear_insertions,
+                s.collinear_declined - s0->collinear_declined, s.updates - s0->updates,
+                s.rejected_gate - s0->rejected_gate, s.rejected_angle - s0->rejected_angle, run.core->slam().num_lines());
+  }
   r.end = run.core->state();
   r.reason = run.core->Status(run.t).mission.reason;
   r.attempts = run.core->Status(run.t).relocalize ? run.core->Status(run.t).relocalize->attempts : 0;
@@ -145,4 +155,20 @@ TEST(RelocTest, Fig14FromRandomPosesCommitsRightKeepsIdsAndFinishes) {
 }
 
 }  // namespace
+}  // namespace irslam
+namespace irslam {
+TEST(RelocDebug, NormalCleanInsertions) {
+  const sim::World world = testing::LoadTestWorld("fig14");
+  robot::CoreOptions options = robot::DefaultCoreOptions();
+  options.mission.mode = "clean";
+  std::optional<slam::SlamStats> s0;
+  sim::InProcessRun run = sim::RunInProcess(world, options, 1, 2000, [&](const sim::InProcessRun& r) {
+    if (!s0 && r.core->state() == control::MissionState::kClean) s0 = r.core->slam().stats();
+  });
+  const auto& s = run.core->slam().stats();
+  std::printf("normal clean: during cleaning windows %d ins %d coll %d declined %d upd %d gate %d angle %d; lines %zu\n",
+              s.windows - s0->windows, s.insertions - s0->insertions, s.collinear_insertions - s0->collinear_insertions,
+              s.collinear_declined - s0->collinear_declined, s.updates - s0->updates,
+              s.rejected_gate - s0->rejected_gate, s.rejected_angle - s0->rejected_angle, run.core->slam().num_lines());
+}
 }  // namespace irslam
