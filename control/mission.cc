@@ -299,7 +299,9 @@ WheelCommand Mission::ToWheels(const Twist& tw, double dt) {
 }
 
 bool Mission::Watchdogs(double t, const slam::Slam& slam) {
-  const bool cleaning = state_ == MissionState::kClean || state_ == MissionState::kReturnHome;
+  // (Relocalising again while cleaning counts as cleaning: its own time limit.)
+  const bool cleaning = state_ == MissionState::kClean || state_ == MissionState::kReturnHome ||
+                        (state_ == MissionState::kRelocalize && after_reloc_ != MissionState::kModel);
   if (cleaning ? t - clean_started_ > options_.cleaning.max_time_s
                : t - started_at_ > options_.max_time_s) {
     if (cleaning) clean_.SetState(CleanState::kStopped, t, slam.distance_m());

@@ -157,7 +157,48 @@ TEST(RelocTest, Fig14FromRandomPosesCommitsRightKeepsIdsAndFinishes) {
 }  // namespace
 }  // namespace irslam
 namespace irslam {
+TEST(RelocDebug, Sweep) {
+  const char* worlds = std::getenv("RELOC_WORLDS");
+  if (!worlds) GTEST_SKIP();
+  const int runs = std::atoi(std::getenv("RELOC_RUNS") ? std::getenv("RELOC_RUNS") : "10");
+  std::string list = worlds;
+  size_t pos = 0;
+  while (pos <= list.size()) {
+    const size_t end = std::min(list.find(',', pos), list.size());
+    const std::string name = list.substr(pos, end - pos);
+    pos = end + 1;
+    const sim::World world = testing::LoadTestWorld(name);
+    const Made made = MakeMap(world, 1);
+    std::mt19937_64 rng(99);
+    int right = 0, wrong = 0, none = 0;
+    std::vector<double> times;
+    double worst_after = 0, worst_after_deg = 0;
+    for (int i = 0; i < runs; ++i) {
+      const Pose2 start = RandomFreePose(world, &rng);
+      const RelocResult r = Relocalise(world, made, start, 100 + i, 1500, true);
+      if (!r.committed) { ++none; std::printf("  %s run %d: no commit (%s)\n", name.c_str(), i, r.reason.c_str()); continue; }
+      if (r.err_at_commit_m > 0.2 || r.err_at_commit_rad > 10 * M_PI / 180) {
+        ++wrong;
+        std::printf("  %s run %d: WRONG %.2f m %.1f deg attempts %d end %s\n", name.c_str(), i, r.err_at_commit_m,
+                    r.err_at_commit_rad * 180 / M_PI, r.attempts, r.reason.c_str());
+        continue;
+      }
+      ++right;
+      times.push_back(r.commit_t);
+      worst_after = std::max(worst_after, r.max_err_after_m);
+      worst_after_deg = std::max(worst_after_deg, r.max_err_after_rad * 180 / M_PI);
+      if (r.attempts > 1 || r.end != control::MissionState::kDone)
+        std::printf("  %s run %d: attempts %d end %s (%s)\n", name.c_str(), i, r.attempts, control::ToString(r.end), r.reason.c_str());
+    }
+    std::sort(times.begin(), times.end());
+    std::printf("%s: right %d wrong %d none %d; t median %.1f max %.1f; worst after %.3f m %.2f deg\n", name.c_str(),
+                right, wrong, none, times.empty() ? 0 : times[times.size() / 2], times.empty() ? 0 : times.back(),
+                worst_after, worst_after_deg);
+  }
+}
+
 TEST(RelocDebug, NormalCleanInsertions) {
+  if (!std::getenv("RELOC_DEBUG")) GTEST_SKIP();
   const sim::World world = testing::LoadTestWorld("fig14");
   robot::CoreOptions options = robot::DefaultCoreOptions();
   options.mission.mode = "clean";
