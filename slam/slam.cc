@@ -138,6 +138,19 @@ void Slam::ForgetMap() {
   saved_frame_ = false;
 }
 
+void Slam::RemoveLines(const std::vector<int>& ids) {
+  for (int id : ids) {
+    const int i = IndexOf(id);
+    // Line 0 fixes the map frame's rotation when it is not a saved one: kept.
+    if (i < 0 || (i == 0 && !saved_frame_)) continue;
+    ekf_.RemoveLine(i);
+    lines_.erase(lines_.begin() + i);
+  }
+  for (auto& l : lines_) {
+    if (std::find(ids.begin(), ids.end(), l.collinear_with) != ids.end()) l.collinear_with = 0;
+  }
+}
+
 int Slam::IndexOf(int id) const {
   for (size_t i = 0; i < lines_.size(); ++i) {
     if (lines_[i].id == id) return static_cast<int>(i);

@@ -181,6 +181,9 @@ class Slam {
   // the robot relocalises again): the lines and the trajectory are dropped, the
   // pose and the odometry (its distance too) go on, the frame is its own again.
   void ForgetMap();
+  // Takes lines out of the map (issue 14: the sides of furniture that has moved
+  // since the saved map), with their rows of the EKF state; ties to them are cut.
+  void RemoveLines(const std::vector<int>& ids);
   bool in_saved_map() const { return saved_frame_; }
 
   // Feeds one window's extracted lines (robot frame) to the map; public so tests

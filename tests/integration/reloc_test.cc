@@ -154,6 +154,34 @@ TEST(RelocTest, Fig14FromRandomPosesCommitsRightKeepsIdsAndFinishes) {
   EXPECT_GE(right, runs - 1);
 }
 
+TEST(RelocTest, FurnitureMovedHalfAMetreIsDetectedAndKeepsItsId) {
+  const sim::World world = testing::LoadTestWorld("fig14");
+  const Made made = MakeMap(world, 1);
+  for (const auto& o : world.objects)
+    std::printf("world object [%.2f %.2f %.2f %.2f]\n", o.xmin, o.ymin, o.xmax, o.ymax);
+  for (const auto& o : made.map.objects)
+    std::printf("map object %d [%.2f %.2f %.2f %.2f] %s\n", o.id, o.box.xmin, o.box.ymin, o.box.xmax, o.box.ymax,
+                control::ToString(o.kind));
+  const int which = std::getenv("RELOC_MOVE") ? std::atoi(std::getenv("RELOC_MOVE")) : 0;
+  const double dx = std::getenv("RELOC_DX") ? std::atof(std::getenv("RELOC_DX")) : 0.5;
+  const double dy = std::getenv("RELOC_DY") ? std::atof(std::getenv("RELOC_DY")) : 0.0;
+  sim::World moved = world;
+  moved.objects[static_cast<size_t>(which)].xmin += dx;
+  moved.objects[static_cast<size_t>(which)].xmax += dx;
+  moved.objects[static_cast<size_t>(which)].ymin += dy;
+  moved.objects[static_cast<size_t>(which)].ymax += dy;
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 3; ++i) {
+    const Pose2 start = RandomFreePose(moved, &rng);
+    const RelocResult r = Relocalise(moved, made, start, 30 + i, 1500, true);
+    std::printf("moved run %d: committed %d err %.3f attempts %d, end %s (%s)\n", i, r.committed, r.err_at_commit_m, r.attempts,
+                control::ToString(r.end), r.reason.c_str());
+    for (const auto& o : r.map.objects)
+      std::printf("  object %d [%.2f %.2f %.2f %.2f] %s %s\n", o.id, o.box.xmin, o.box.ymin, o.box.xmax, o.box.ymax,
+                  o.complete ? "complete" : "incomplete", o.note.c_str());
+  }
+}
+
 }  // namespace
 }  // namespace irslam
 namespace irslam {
