@@ -110,9 +110,43 @@ void Slam::AdoptMap(const Pose2& local_to_map, const std::vector<LineFeature>& s
       Eigen::Vector3d(ro.pose_sigma_m * ro.pose_sigma_m, ro.pose_sigma_m * ro.pose_sigma_m,
                       ro.pose_sigma_rad * ro.pose_sigma_rad)
           .asDiagonal();
+  // Local lines the saved map does not have (a piece of furniture moved or
+  // new, seen while relocalising) are kept, as new lines after the saved ones:
+  // the model then knows them before any work is planned.
+  std::vector<LineFeature> kept = saved_lines;
+  for (LineFeature l : lines_) {
+    l.p0 = Transform(local_to_map, l.p0);
+    l.p1 = Transform(local_to_map, l.p1);
+    l.theta = NormalizeAngle(l.theta + local_to_map.theta);
+    l.rho += Normal(l.theta).dot(Eigen::Vector2d(local_to_map.x, local_to_map.y));
+    if (l.rho < 0) {
+      l.rho = -l.rho;
+      l.theta = NormalizeAngle(l.theta + M_PI);
+    }
+    const bool known = std::any_of(saved_lines.begin(), saved_lines.end(), [&](const LineFeature& m) {
+      const double dt = std::abs(NormalizeAngle(l.theta - m.theta));
+      const Eigen::Vector2d d = Direction(m.theta);
+      const double lo = std::min(d.dot(m.p0), d.dot(m.p1)), hi = std::max(d.dot(m.p0), d.dot(m.p1));
+      const double a = std::min(d.dot(l.p0), d.dot(l.p1)), b = std::max(d.dot(l.p0), d.dot(l.p1));
+      return dt < ro.known_angle_rad && std::abs(l.rho - m.rho) < ro.known_offset_m &&
+             std::min(hi, b) - std::max(lo, a) > -ro.known_offset_m;
+    });
+    if (known) continue;
+    l.collinear_with = 0;
+    l.id = 0;  // numbered below, after the saved ones
+    kept.push_back(l);
+    Eigen::Matrix2d c = l.cov;
+    c(0, 0) = std::max(c(0, 0), floor(0, 0));
+    c(1, 1) = std::max(c(1, 1), floor(1, 1));
+    state.push_back({l.rho, l.theta, c});
+  }
   ekf_.Restart(Compose(local_to_map, ekf_.pose()), pose_cov, state);
-  lines_ = saved_lines;
+  lines_ = std::move(kept);
   next_id_ = 1;
+  for (const auto& l : lines_) next_id_ = std::max(next_id_, l.id + 1);
+  for (auto& l : lines_) {
+    if (l.id == 0) l.id = next_id_++;
+  }
   for (size_t i = 0; i < lines_.size(); ++i) {
     // The state's normalised (rho >= 0) form; the endpoints are the saved ones.
     lines_[i].rho = ekf_.rho(static_cast<int>(i));
@@ -554,6 +588,9 @@ options::Table<ResumeOptions> ResumeKeys() {
       {"line_sigma_rho_m", &R::line_sigma_rho_m, 0, 1, "m",
        "a saved line's rho keeps at least this uncertainty when a mission continues in its map"},
       {"line_sigma_theta_rad", &R::line_sigma_theta_rad, 0, 1, "rad", "... and its theta this"},
+      {"known_offset_m", &R::known_offset_m, 0, 2, "m",
+       "a line seen while relocalising is a saved one if within this offset (and angle) and overlapping ..."},
+      {"known_angle_rad", &R::known_angle_rad, 0, 1, "rad", "... else it is kept as a new line"},
   };
   return kKeys;
 }

@@ -84,6 +84,10 @@ struct ResumeOptions {
   double pose_sigma_rad = 0.02;
   double line_sigma_rho_m = 0.005;
   double line_sigma_theta_rad = 0.005;
+  // A local line (seen while relocalising) is one of the saved map's when a
+  // saved line is within these of it and overlaps it; else it is kept as new.
+  double known_offset_m = 0.1;
+  double known_angle_rad = 0.1;
 };
 options::Table<ResumeOptions> ResumeKeys();  // [slam.resume]
 
@@ -173,9 +177,9 @@ class Slam {
   // the EKF's lines are replaced by the saved ones (map frame, ids kept, the
   // next new line numbered after them), the pose is carried over by the
   // transform with the [slam.resume] uncertainty, the trajectory so far is
-  // transformed, and the calibration is kept. The local lines are dropped: they
-  // are the saved lines seen again (those that are not come back as new lines
-  // when seen again).
+  // transformed, and the calibration is kept. The local lines that are saved
+  // lines seen again are dropped; the others (furniture moved or new) are
+  // kept as new lines, numbered after the saved ones.
   void AdoptMap(const Pose2& local_to_map, const std::vector<LineFeature>& saved_lines);
   // Starts a new local map where the robot is (issue 14: the map disagreed and
   // the robot relocalises again): the lines and the trajectory are dropped, the

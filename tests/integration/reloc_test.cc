@@ -77,8 +77,13 @@ RelocResult Relocalise(const sim::World& world, const Made& made, const Pose2& s
   w.start = start;
   RelocResult r;
   std::optional<slam::SlamStats> s0;
+  std::string last_reason;
   const auto on_tick = [&](const sim::InProcessRun& run) {
     if (!s0 && run.core->state() == control::MissionState::kClean) s0 = run.core->slam().stats();
+    if (std::getenv("RELOC_TRACE") && run.core->Status(run.t).mission.reason != last_reason) {
+      last_reason = run.core->Status(run.t).mission.reason;
+      std::printf("    %.1f %s: %s\n", run.t, control::ToString(run.core->state()), last_reason.c_str());
+    }
     const auto st = run.core->Status(run.t);
     if (!st.relocalize || !st.relocalize->committed || !run.core->slam().in_saved_map()) return;
     const Pose2 est = Compose(made.world_from_map, run.core->slam().map_pose());
