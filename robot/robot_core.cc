@@ -183,7 +183,8 @@ MapSnapshot RobotCore::Map() const {
   const control::EnvironmentModel& model = mission_.model();
   MapSnapshot m{mission_.state(),    slam_.map_pose(), slam_.map_pose_cov(),     slam_.map_lines(),
                 model.room,          model.objects,    slam_.map_trajectory(), std::nullopt,
-                options_.slam.calibration.enabled ? std::optional(slam_.calibration()) : std::nullopt};
+                options_.slam.calibration.enabled ? std::optional(slam_.calibration()) : std::nullopt,
+                std::nullopt};
   if (mission_.clean().active()) m.cleaning = mission_.cleaning(slam_.time(), slam_.distance_m());
   return m;
 }
