@@ -200,6 +200,17 @@ class Slam {
   Pose2 OdometryAt(double t) const;
   void CloseWindow();
   void Associate(const ExtractedLine& obs);
+  // The pieces of Associate: the nearest mapped line by eq. (13) (-1: none
+  // within epsilon_DH); a collinear piece, eqs. (14)-(15); a match, eq. (10),
+  // its rows and innovation, its gate (false: not used; *r_scale > 1 for a gate
+  // recovery).
+  int NearestLine(double rho_m, double theta_m, double* best_dr) const;
+  void InsertCollinearPiece(const ExtractedLine& obs, int best, double best_dr);
+  void UpdateMatched(const ExtractedLine& obs, int best, const Pose2& pose);
+  void MatchRows(const Pose2& pose, int best, const ExtractedLine& obs, std::vector<Eigen::RowVectorXd>* rows,
+                 std::vector<double>* y) const;
+  bool PassesGate(const std::vector<Eigen::RowVectorXd>& rows, const std::vector<double>& y,
+                  const ExtractedLine& obs, double* r_scale);
   int InsertLine(const ExtractedLine& obs, int collinear_with_index);
   void ApplyConstraintsOnly(int index);
   void AppendConstraintRows(int index, std::vector<Eigen::RowVectorXd>* h,
