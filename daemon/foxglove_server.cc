@@ -120,7 +120,7 @@ class Server::Session : public std::enable_shared_from_this<Session> {
     t.keep_alive_pings = true;
     ws_.set_option(t);
     ws_.set_option(websocket::stream_base::decorator([](websocket::response_type& res) {
-      res.set(http::field::sec_websocket_protocol, kSubprotocol);
+      res.set(http::field::sec_websocket_protocol, std::string(kSubprotocol));
       res.set(http::field::server, "irslam-foxglove");
     }));
     ws_.read_message_max(server_->options_.max_client_message_bytes);
