@@ -361,6 +361,7 @@ struct Client {
     });
   }
   void Read() {
+    io.restart();  // run out of work after the previous operation
     done = false;
     buffer.consume(buffer.size());
     ws.async_read(buffer, [this](const beast::error_code& e, size_t) {
