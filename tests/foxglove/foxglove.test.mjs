@@ -13,8 +13,10 @@ import { tmpdir } from "node:os";
 import { join, dirname } from "node:path";
 import { fileURLToPath } from "node:url";
 import { promisify } from "node:util";
-import { FoxgloveClient } from "@foxglove/ws-protocol";
+import wsProtocol from "@foxglove/ws-protocol"; // CommonJS: no named exports in ESM
 import WebSocket from "ws";
+
+const { FoxgloveClient } = wsProtocol;
 
 const here = dirname(fileURLToPath(import.meta.url));
 const src = process.env.IRSLAM_SOURCE_DIR ?? join(here, "..", "..");
