@@ -162,7 +162,7 @@ class Server::Session : public std::enable_shared_from_this<Session> {
   void OnRead(const error_code& ec) {
     if (closing_) return;
     if (ec) {
-      if (ec == websocket::error::closed) return Close(websocket::close_code::normal, "");
+      if (ec == websocket::error::closed) return Close(websocket::close_code::normal, "by the client");
       if (ec == websocket::error::message_too_big) return BadInput("message over the size limit");
       return Close(websocket::close_code::normal, ec.message());
     }
