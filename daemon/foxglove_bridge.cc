@@ -1,8 +1,8 @@
 #include "daemon/foxglove_bridge.h"
 
+#include <algorithm>
 #include <boost/asio/read_until.hpp>
 #include <boost/asio/write.hpp>
-#include <algorithm>
 #include <cstdio>
 #include <istream>
 
@@ -15,13 +15,15 @@ using boost::system::error_code;
 using nlohmann::json;
 
 uint64_t WallTimeNs() {
-  return static_cast<uint64_t>(
-      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch()).count());
+  return static_cast<uint64_t>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                   std::chrono::system_clock::now().time_since_epoch())
+                                   .count());
 }
 
 namespace {
 std::chrono::steady_clock::duration Seconds(double s) {
-  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
+  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(s));
 }
 }  // namespace
 
@@ -57,12 +59,13 @@ void Bridge::Connect() {
   error_code ec;
   socket_.close(ec);
   socket_ = asio::local::stream_protocol::socket(io_);
-  socket_.async_connect(asio::local::stream_protocol::endpoint(options_.socket_path),
-                        [this, gen](const error_code& e) {
-                          if (gen != generation_ || stopped_) return;
-                          if (e) return Lost("cannot reach irslamd at " + options_.socket_path + ": " + e.message());
-                          OnConnected();
-                        });
+  socket_.async_connect(
+      asio::local::stream_protocol::endpoint(options_.socket_path),
+      [this, gen](const error_code& e) {
+        if (gen != generation_ || stopped_) return;
+        if (e) return Lost("cannot reach irslamd at " + options_.socket_path + ": " + e.message());
+        OnConnected();
+      });
 }
 
 void Bridge::OnConnected() {
@@ -75,7 +78,10 @@ void Bridge::OnConnected() {
   in_.consume(in_.size());
   map_id_ = 0;
   subscribe_id_ = next_id_++;
-  Send(json{{"jsonrpc", "2.0"}, {"id", subscribe_id_}, {"method", "subscribe"}, {"params", {{"rate", options_.status_rate_hz}}}}
+  Send(json{{"jsonrpc", "2.0"},
+            {"id", subscribe_id_},
+            {"method", "subscribe"},
+            {"params", {{"rate", options_.status_rate_hz}}}}
            .dump());
   ReadLine();
 }
@@ -106,9 +112,11 @@ void Bridge::ReadLine() {
     if (gen != generation_ || stopped_) return;
     if (ec) {
       if (ec == asio::error::not_found) return Lost("irslamd sent a line over the size limit");
-      return Lost(ec == asio::error::eof ? "irslamd closed the connection" : "irslamd: read: " + ec.message());
+      return Lost(ec == asio::error::eof ? "irslamd closed the connection"
+                                         : "irslamd: read: " + ec.message());
     }
-    std::string line(asio::buffers_begin(in_.data()), asio::buffers_begin(in_.data()) + static_cast<std::ptrdiff_t>(n));
+    std::string line(asio::buffers_begin(in_.data()),
+                     asio::buffers_begin(in_.data()) + static_cast<std::ptrdiff_t>(n));
     in_.consume(n);
     HandleLine(line);
     if (gen == generation_ && !stopped_) ReadLine();
@@ -133,7 +141,8 @@ void Bridge::HandleLine(const std::string& line) {
   if (!j->contains("id")) return;
   const json& id = (*j)["id"];
   const bool is_error = j->contains("error");
-  const std::string message = is_error && (*j)["error"].is_object() ? (*j)["error"].value("message", "error") : "";
+  const std::string message =
+      is_error && (*j)["error"].is_object() ? (*j)["error"].value("message", "error") : "";
   if (id == subscribe_id_) {
     if (is_error) Lost("irslamd refused the subscription: " + message);
     return;
@@ -156,7 +165,8 @@ void Bridge::Lost(const std::string& why) {
   writing_ = false;
   map_id_ = 0;
   if (connected_ || why != last_error_) {
-    std::fprintf(stderr, "<4>foxglove: %s; trying again (every %g s at most)\n", why.c_str(), options_.backoff_max_s);
+    std::fprintf(stderr, "<4>foxglove: %s; trying again (every %g s at most)\n", why.c_str(),
+                 options_.backoff_max_s);
   }
   if (connected_) {
     ++stats_.disconnects;
@@ -182,7 +192,8 @@ void Bridge::Tick() {
   if (stopped_) return;
   if (connected_) {
     if (std::chrono::steady_clock::now() - last_status_ > Seconds(options_.status_timeout_s)) {
-      Lost("no status from irslamd for " + std::to_string(static_cast<int>(options_.status_timeout_s)) + " s");
+      Lost("no status from irslamd for " +
+           std::to_string(static_cast<int>(options_.status_timeout_s)) + " s");
     } else if (map_id_ == 0 && MapWanted()) {
       map_id_ = next_id_++;
       Send(json{{"jsonrpc", "2.0"}, {"id", map_id_}, {"method", "map"}}.dump());
@@ -213,7 +224,10 @@ void Bridge::OnMap(const json& map, uint64_t t_ns) {
 
 void Bridge::PublishDisconnected() {
   const uint64_t t = WallTimeNs();
-  server_->Publish(kState, t, StateMessage(json(), false, last_error_.empty() ? "not connected yet" : last_error_, t).dump());
+  server_->Publish(
+      kState, t,
+      StateMessage(json(), false, last_error_.empty() ? "not connected yet" : last_error_, t)
+          .dump());
 }
 
 }  // namespace irslam::foxglove

@@ -11,10 +11,10 @@
 #include <boost/asio/local/stream_protocol.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <boost/asio/streambuf.hpp>
-#include <nlohmann/json.hpp>
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "daemon/foxglove_messages.h"
@@ -23,12 +23,12 @@
 namespace irslam::foxglove {
 
 struct BridgeOptions {
-  std::string socket_path;       // irslamd's control socket
-  double status_rate_hz = 10;    // the subscribe rate asked of irslamd
-  double map_period_s = 1;       // map polls while a map topic has subscribers
-  double backoff_min_s = 0.2;    // reconnect delays, doubling up to the max
+  std::string socket_path;     // irslamd's control socket
+  double status_rate_hz = 10;  // the subscribe rate asked of irslamd
+  double map_period_s = 1;     // map polls while a map topic has subscribers
+  double backoff_min_s = 0.2;  // reconnect delays, doubling up to the max
   double backoff_max_s = 5;
-  double status_timeout_s = 5;   // no status this long: reconnect (a hung daemon)
+  double status_timeout_s = 5;  // no status this long: reconnect (a hung daemon)
   size_t max_line_bytes = 64u << 20;
   RobotShape robot;
 };

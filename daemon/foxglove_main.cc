@@ -31,7 +31,8 @@ bool ParseListen(const std::string& text, asio::ip::tcp::endpoint* ep, std::stri
     return false;
   }
   std::string host = text.substr(0, colon);
-  if (host.size() > 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  if (host.size() > 2 && host.front() == '[' && host.back() == ']')
+    host = host.substr(1, host.size() - 2);
   if (host == "localhost") host = "127.0.0.1";
   boost::system::error_code ec;
   const auto addr = asio::ip::make_address(host, ec);
@@ -58,12 +59,16 @@ int main(int argc, char** argv) {
   std::string listen = "127.0.0.1:8765";
   std::string config_path;
   double rate = 10, map_period = 1;
-  app.add_option("--socket", socket_path, "irslamd's control socket ($IRSLAM_SOCKET, else /run/irslam/irslamd.sock)");
+  app.add_option("--socket", socket_path,
+                 "irslamd's control socket ($IRSLAM_SOCKET, else /run/irslam/irslamd.sock)");
   app.add_option("--listen", listen, "address:port of the WebSocket server (loopback by default)")
       ->capture_default_str();
   app.add_option("--config", config_path,
-                 "irslamd's config, for the IR sensor mounts (default: /etc/irslam/irslamd.conf when it exists)");
-  app.add_option("--rate", rate, "status rate asked of irslamd, Hz")->check(CLI::Range(0.1, 50.0))->capture_default_str();
+                 "irslamd's config, for the IR sensor mounts (default: /etc/irslam/irslamd.conf "
+                 "when it exists)");
+  app.add_option("--rate", rate, "status rate asked of irslamd, Hz")
+      ->check(CLI::Range(0.1, 50.0))
+      ->capture_default_str();
   app.add_option("--map-period", map_period, "map poll period while a map topic is watched, s")
       ->check(CLI::Range(0.1, 60.0))
       ->capture_default_str();
@@ -96,11 +101,14 @@ int main(int argc, char** argv) {
     return 1;
   }
   if (!endpoint.address().is_loopback()) {
-    std::fprintf(stderr, "<4>foxglove: listening on %s, not loopback: anyone who reaches it sees the robot's data\n",
-                 endpoint.address().to_string().c_str());
+    std::fprintf(
+        stderr,
+        "<4>foxglove: listening on %s, not loopback: anyone who reaches it sees the robot's data\n",
+        endpoint.address().to_string().c_str());
   }
   const auto local = server.local_endpoint();
-  const std::string host = local.address().is_v6() ? "[" + local.address().to_string() + "]" : local.address().to_string();
+  const std::string host = local.address().is_v6() ? "[" + local.address().to_string() + "]"
+                                                   : local.address().to_string();
   std::fprintf(stderr, "<6>foxglove: listening on ws://%s:%u (irslamd at %s)\n", host.c_str(),
                static_cast<unsigned>(local.port()), socket_path.c_str());
 
@@ -118,9 +126,11 @@ int main(int argc, char** argv) {
   std::signal(SIGPIPE, SIG_IGN);
   io.run();
   const auto& st = server.stats();
-  std::fprintf(stderr, "<6>foxglove: clients %llu, refused %llu, bad input %llu, messages sent %llu, dropped %llu\n",
-               static_cast<unsigned long long>(st.accepted), static_cast<unsigned long long>(st.rejected),
-               static_cast<unsigned long long>(st.bad_input), static_cast<unsigned long long>(st.sent),
-               static_cast<unsigned long long>(st.dropped));
+  std::fprintf(
+      stderr,
+      "<6>foxglove: clients %llu, refused %llu, bad input %llu, messages sent %llu, dropped %llu\n",
+      static_cast<unsigned long long>(st.accepted), static_cast<unsigned long long>(st.rejected),
+      static_cast<unsigned long long>(st.bad_input), static_cast<unsigned long long>(st.sent),
+      static_cast<unsigned long long>(st.dropped));
   return 0;
 }

@@ -31,7 +31,8 @@ json DurationSchema(const char* description) {
   return {{"type", "object"},
           {"title", "duration"},
           {"properties",
-           {{"sec", {{"type", "integer"}}}, {"nsec", {{"type", "integer"}, {"minimum", 0}, {"maximum", 999999999}}}}},
+           {{"sec", {{"type", "integer"}}},
+            {"nsec", {{"type", "integer"}, {"minimum", 0}, {"maximum", 999999999}}}}},
           {"description", description}};
 }
 
@@ -40,7 +41,9 @@ json Vector3Schema(const char* description) {
           {"description", description},
           {"type", "object"},
           {"properties",
-           {{"x", Number("x coordinate length")}, {"y", Number("y coordinate length")}, {"z", Number("z coordinate length")}}}};
+           {{"x", Number("x coordinate length")},
+            {"y", Number("y coordinate length")},
+            {"z", Number("z coordinate length")}}}};
 }
 
 json QuaternionSchema(const char* description) {
@@ -48,7 +51,10 @@ json QuaternionSchema(const char* description) {
           {"description", description},
           {"type", "object"},
           {"properties",
-           {{"x", Number("x value")}, {"y", Number("y value")}, {"z", Number("z value")}, {"w", Number("w value")}}}};
+           {{"x", Number("x value")},
+            {"y", Number("y value")},
+            {"z", Number("z value")},
+            {"w", Number("w value")}}}};
 }
 
 json PoseSchema(const char* description) {
@@ -86,99 +92,138 @@ json ArrayOf(json items, const char* description) {
 }
 
 json Primitive(const char* title, const char* description, json properties) {
-  return {{"title", title}, {"description", description}, {"type", "object"}, {"properties", std::move(properties)}};
+  return {{"title", title},
+          {"description", description},
+          {"type", "object"},
+          {"properties", std::move(properties)}};
 }
 
-json ShapeProperties(const char* pose_description, const char* size_description, const char* color_description) {
+json ShapeProperties(const char* pose_description, const char* size_description,
+                     const char* color_description) {
   return {{"pose", PoseSchema(pose_description)},
           {"size", Vector3Schema(size_description)},
           {"color", ColorSchema(color_description)}};
 }
 
-json IndexArray(const char* description) { return ArrayOf({{"type", "integer"}, {"minimum", 0}}, description); }
+json IndexArray(const char* description) {
+  return ArrayOf({{"type", "integer"}, {"minimum", 0}}, description);
+}
 
 json SceneEntitySchema() {
-  json line_type = {
-      {"title", "foxglove.LineType"},
-      {"description", "Drawing primitive to use for lines"},
-      {"oneOf",
-       {{{"title", "LINE_STRIP"}, {"const", 0}, {"description", "Connected line segments: 0-1, 1-2, ..., (n-1)-n"}},
-        {{"title", "LINE_LOOP"}, {"const", 1}, {"description", "Closed polygon: 0-1, 1-2, ..., (n-1)-n, n-0"}},
-        {{"title", "LINE_LIST"}, {"const", 2}, {"description", "Individual line segments: 0-1, 2-3, 4-5, ..."}}}}};
-  json arrow = Primitive("foxglove.ArrowPrimitive", "A primitive representing an arrow",
-                         {{"pose", PoseSchema("Position of the arrow's tail and orientation of the arrow")},
-                          {"shaft_length", Number("Length of the arrow shaft")},
-                          {"shaft_diameter", Number("Diameter of the arrow shaft")},
-                          {"head_length", Number("Length of the arrow head")},
-                          {"head_diameter", Number("Diameter of the arrow head")},
-                          {"color", ColorSchema("Color of the arrow")}});
-  json cube = Primitive("foxglove.CubePrimitive", "A primitive representing a cube or rectangular prism",
-                        ShapeProperties("Position of the center of the cube and orientation of the cube",
-                                        "Size of the cube along each axis", "Color of the cube"));
-  json sphere = Primitive("foxglove.SpherePrimitive", "A primitive representing a sphere or ellipsoid",
-                          ShapeProperties("Position of the center of the sphere and orientation of the sphere",
-                                          "Size (diameter) of the sphere along each axis", "Color of the sphere"));
-  json cylinder_props = ShapeProperties("Position of the center of the cylinder and orientation of the cylinder",
-                                        "Size of the cylinder's bounding box", "Color of the cylinder");
-  cylinder_props["bottom_scale"] = Number("0-1, ratio of the diameter of the cylinder's bottom face");
+  json line_type = {{"title", "foxglove.LineType"},
+                    {"description", "Drawing primitive to use for lines"},
+                    {"oneOf",
+                     {{{"title", "LINE_STRIP"},
+                       {"const", 0},
+                       {"description", "Connected line segments: 0-1, 1-2, ..., (n-1)-n"}},
+                      {{"title", "LINE_LOOP"},
+                       {"const", 1},
+                       {"description", "Closed polygon: 0-1, 1-2, ..., (n-1)-n, n-0"}},
+                      {{"title", "LINE_LIST"},
+                       {"const", 2},
+                       {"description", "Individual line segments: 0-1, 2-3, 4-5, ..."}}}}};
+  json arrow =
+      Primitive("foxglove.ArrowPrimitive", "A primitive representing an arrow",
+                {{"pose", PoseSchema("Position of the arrow's tail and orientation of the arrow")},
+                 {"shaft_length", Number("Length of the arrow shaft")},
+                 {"shaft_diameter", Number("Diameter of the arrow shaft")},
+                 {"head_length", Number("Length of the arrow head")},
+                 {"head_diameter", Number("Diameter of the arrow head")},
+                 {"color", ColorSchema("Color of the arrow")}});
+  json cube =
+      Primitive("foxglove.CubePrimitive", "A primitive representing a cube or rectangular prism",
+                ShapeProperties("Position of the center of the cube and orientation of the cube",
+                                "Size of the cube along each axis", "Color of the cube"));
+  json sphere = Primitive(
+      "foxglove.SpherePrimitive", "A primitive representing a sphere or ellipsoid",
+      ShapeProperties("Position of the center of the sphere and orientation of the sphere",
+                      "Size (diameter) of the sphere along each axis", "Color of the sphere"));
+  json cylinder_props =
+      ShapeProperties("Position of the center of the cylinder and orientation of the cylinder",
+                      "Size of the cylinder's bounding box", "Color of the cylinder");
+  cylinder_props["bottom_scale"] =
+      Number("0-1, ratio of the diameter of the cylinder's bottom face");
   cylinder_props["top_scale"] = Number("0-1, ratio of the diameter of the cylinder's top face");
-  json cylinder = Primitive("foxglove.CylinderPrimitive", "A primitive representing a cylinder, elliptic cylinder, or truncated cone",
-                            cylinder_props);
+  json cylinder = Primitive(
+      "foxglove.CylinderPrimitive",
+      "A primitive representing a cylinder, elliptic cylinder, or truncated cone", cylinder_props);
   json line = Primitive(
       "foxglove.LinePrimitive", "A primitive representing a series of points connected by lines",
       {{"type", line_type},
        {"pose", PoseSchema("Origin of lines relative to reference frame")},
        {"thickness", Number("Line thickness")},
-       {"scale_invariant", Bool("Indicates whether `thickness` is a fixed size in screen pixels (true), or specified in "
-                                "world coordinates and scales with distance from the camera (false)")},
+       {"scale_invariant",
+        Bool("Indicates whether `thickness` is a fixed size in screen pixels (true), or specified "
+             "in "
+             "world coordinates and scales with distance from the camera (false)")},
        {"points", ArrayOf(Point3Schema(), "Points along the line")},
-       {"color", ColorSchema("Solid color to use for the whole line. One of `color` or `colors` must be provided.")},
-       {"colors", ArrayOf(ColorSchema("A color in RGBA format"), "Per-point colors (if specified, must have the same "
-                                                                  "length as `points`). One of `color` or `colors` "
-                                                                  "must be provided.")},
-       {"indices", IndexArray("Indices into the `points` and `colors` attribute arrays, which can be used to avoid "
-                              "duplicating attribute data.")}});
+       {"color",
+        ColorSchema(
+            "Solid color to use for the whole line. One of `color` or `colors` must be provided.")},
+       {"colors", ArrayOf(ColorSchema("A color in RGBA format"),
+                          "Per-point colors (if specified, must have the same "
+                          "length as `points`). One of `color` or `colors` "
+                          "must be provided.")},
+       {"indices",
+        IndexArray(
+            "Indices into the `points` and `colors` attribute arrays, which can be used to avoid "
+            "duplicating attribute data.")}});
   json triangles = Primitive(
-      "foxglove.TriangleListPrimitive", "A primitive representing a set of triangles or a surface tiled by triangles",
+      "foxglove.TriangleListPrimitive",
+      "A primitive representing a set of triangles or a surface tiled by triangles",
       {{"pose", PoseSchema("Origin of triangles relative to reference frame")},
-       {"points", ArrayOf(Point3Schema(), "Vertices to use for triangles, interpreted as a list of triples (0-1-2, "
-                                          "3-4-5, ...)")},
-       {"color", ColorSchema("Solid color to use for the whole shape. One of `color` or `colors` must be provided.")},
+       {"points", ArrayOf(Point3Schema(),
+                          "Vertices to use for triangles, interpreted as a list of triples (0-1-2, "
+                          "3-4-5, ...)")},
+       {"color", ColorSchema("Solid color to use for the whole shape. One of `color` or `colors` "
+                             "must be provided.")},
        {"colors", ArrayOf(ColorSchema("A color in RGBA format"), "Per-vertex colors")},
        {"indices", IndexArray("Indices into the `points` and `colors` attribute arrays")}});
-  json text = Primitive("foxglove.TextPrimitive", "A primitive representing a text label",
-                        {{"pose", PoseSchema("Position of the center of the text box and orientation of the text")},
-                         {"billboard", Bool("Whether the text should respect `pose.orientation` (false) or always "
-                                            "face the camera (true)")},
-                         {"font_size", Number("Font size (height of one line of text)")},
-                         {"scale_invariant", Bool("Indicates whether `font_size` is a fixed size in screen pixels "
-                                                  "(true), or specified in world coordinates")},
-                         {"color", ColorSchema("Color of the text")},
-                         {"text", Str("Text")}});
-  json model = Primitive("foxglove.ModelPrimitive", "A primitive representing a 3D model file loaded from an external URL or embedded data",
-                         {{"pose", PoseSchema("Origin of model relative to reference frame")},
-                          {"scale", Vector3Schema("Scale factor to apply to the model along each axis")},
-                          {"color", ColorSchema("Solid color to use for the whole model")},
-                          {"override_color", Bool("Whether to use the color specified in `color` instead of any "
-                                                  "materials embedded in the original model.")},
-                          {"url", Str("URL pointing to model file. One of `url` or `data` should be provided.")},
-                          {"media_type", Str("Model type")},
-                          {"data", {{"type", "string"}, {"contentEncoding", "base64"}, {"description", "Embedded model"}}}});
+  json text = Primitive(
+      "foxglove.TextPrimitive", "A primitive representing a text label",
+      {{"pose", PoseSchema("Position of the center of the text box and orientation of the text")},
+       {"billboard", Bool("Whether the text should respect `pose.orientation` (false) or always "
+                          "face the camera (true)")},
+       {"font_size", Number("Font size (height of one line of text)")},
+       {"scale_invariant", Bool("Indicates whether `font_size` is a fixed size in screen pixels "
+                                "(true), or specified in world coordinates")},
+       {"color", ColorSchema("Color of the text")},
+       {"text", Str("Text")}});
+  json model = Primitive(
+      "foxglove.ModelPrimitive",
+      "A primitive representing a 3D model file loaded from an external URL or embedded data",
+      {{"pose", PoseSchema("Origin of model relative to reference frame")},
+       {"scale", Vector3Schema("Scale factor to apply to the model along each axis")},
+       {"color", ColorSchema("Solid color to use for the whole model")},
+       {"override_color", Bool("Whether to use the color specified in `color` instead of any "
+                               "materials embedded in the original model.")},
+       {"url", Str("URL pointing to model file. One of `url` or `data` should be provided.")},
+       {"media_type", Str("Model type")},
+       {"data",
+        {{"type", "string"}, {"contentEncoding", "base64"}, {"description", "Embedded model"}}}});
   json kv = Primitive("foxglove.KeyValuePair", "A key with its associated value",
                       {{"key", Str("Key")}, {"value", Str("Value")}});
   return Primitive(
-      "foxglove.SceneEntity", "A visual element in a 3D scene. An entity may be composed of multiple primitives which "
-                              "all share the same frame of reference.",
+      "foxglove.SceneEntity",
+      "A visual element in a 3D scene. An entity may be composed of multiple primitives which "
+      "all share the same frame of reference.",
       {{"timestamp", TimeSchema("Timestamp of the entity")},
        {"frame_id", Str("Frame of reference")},
-       {"id", Str("Identifier for the entity. A entity will replace any prior entity on the same topic with the same "
+       {"id", Str("Identifier for the entity. A entity will replace any prior entity on the same "
+                  "topic with the same "
                   "`id`.")},
-       {"lifetime", DurationSchema("Length of time (relative to `timestamp`) after which the entity should be "
-                                   "automatically removed. Zero value indicates the entity should remain visible "
-                                   "until it is replaced or deleted.")},
-       {"frame_locked", Bool("Whether the entity should keep its location in the fixed frame (false) or follow the "
-                             "frame specified in `frame_id` as it moves relative to the fixed frame (true)")},
-       {"metadata", ArrayOf(kv, "Additional user-provided metadata associated with the entity. Keys must be unique.")},
+       {"lifetime",
+        DurationSchema(
+            "Length of time (relative to `timestamp`) after which the entity should be "
+            "automatically removed. Zero value indicates the entity should remain visible "
+            "until it is replaced or deleted.")},
+       {"frame_locked",
+        Bool("Whether the entity should keep its location in the fixed frame (false) or follow the "
+             "frame specified in `frame_id` as it moves relative to the fixed frame (true)")},
+       {"metadata",
+        ArrayOf(
+            kv,
+            "Additional user-provided metadata associated with the entity. Keys must be unique.")},
        {"arrows", ArrayOf(arrow, "Arrow primitives")},
        {"cubes", ArrayOf(cube, "Cube primitives")},
        {"spheres", ArrayOf(sphere, "Sphere primitives")},
@@ -194,54 +239,71 @@ json SceneUpdateSchema() {
       {"title", "foxglove.SceneEntityDeletionType"},
       {"description", "Type of deletion action to perform"},
       {"oneOf",
-       {{{"title", "MATCHING_ID"}, {"const", 0}, {"description", "Delete the existing entity on the same topic that has the provided `id`"}},
-        {{"title", "ALL"}, {"const", 1}, {"description", "Delete all existing entities on the same topic"}}}}};
-  json deletion = Primitive("foxglove.SceneEntityDeletion", "Command to remove previously published entities",
-                            {{"timestamp", TimeSchema("Timestamp of the deletion. Only matching entities earlier than "
-                                                      "this timestamp will be deleted.")},
-                             {"type", deletion_type},
-                             {"id", Str("Identifier which must match if `type` is `MATCHING_ID`.")}});
-  json s = Primitive("foxglove.SceneUpdate", "An update to the entities displayed in a 3D scene",
-                     {{"deletions", ArrayOf(deletion, "Scene entities to delete")},
-                      {"entities", ArrayOf(SceneEntitySchema(), "Scene entities to add or replace")}});
+       {{{"title", "MATCHING_ID"},
+         {"const", 0},
+         {"description",
+          "Delete the existing entity on the same topic that has the provided `id`"}},
+        {{"title", "ALL"},
+         {"const", 1},
+         {"description", "Delete all existing entities on the same topic"}}}}};
+  json deletion = Primitive(
+      "foxglove.SceneEntityDeletion", "Command to remove previously published entities",
+      {{"timestamp", TimeSchema("Timestamp of the deletion. Only matching entities earlier than "
+                                "this timestamp will be deleted.")},
+       {"type", deletion_type},
+       {"id", Str("Identifier which must match if `type` is `MATCHING_ID`.")}});
+  json s =
+      Primitive("foxglove.SceneUpdate", "An update to the entities displayed in a 3D scene",
+                {{"deletions", ArrayOf(deletion, "Scene entities to delete")},
+                 {"entities", ArrayOf(SceneEntitySchema(), "Scene entities to add or replace")}});
   s["$comment"] = "Foxglove's foxglove.SceneUpdate, as published in foxglove/schemas";
   return s;
 }
 
 json FrameTransformSchema() {
-  json s = Primitive("foxglove.FrameTransform", "A transform between two reference frames in 3D space",
-                     {{"timestamp", TimeSchema("Timestamp of transform")},
-                      {"parent_frame_id", Str("Name of the parent frame")},
-                      {"child_frame_id", Str("Name of the child frame")},
-                      {"translation", Vector3Schema("Translation component of the transform")},
-                      {"rotation", QuaternionSchema("Rotation component of the transform")}});
+  json s =
+      Primitive("foxglove.FrameTransform", "A transform between two reference frames in 3D space",
+                {{"timestamp", TimeSchema("Timestamp of transform")},
+                 {"parent_frame_id", Str("Name of the parent frame")},
+                 {"child_frame_id", Str("Name of the child frame")},
+                 {"translation", Vector3Schema("Translation component of the transform")},
+                 {"rotation", QuaternionSchema("Rotation component of the transform")}});
   return s;
 }
 
 json PoseInFrameSchema() {
-  return Primitive("foxglove.PoseInFrame", "A timestamped pose for an object or reference frame in 3D space",
+  return Primitive("foxglove.PoseInFrame",
+                   "A timestamped pose for an object or reference frame in 3D space",
                    {{"timestamp", TimeSchema("Timestamp of pose")},
                     {"frame_id", Str("Frame of reference for pose position and orientation")},
                     {"pose", PoseSchema("Pose in 3D space")}});
 }
 
 json PosesInFrameSchema() {
-  return Primitive("foxglove.PosesInFrame", "An array of timestamped poses for an object or reference frame in 3D space",
-                   {{"timestamp", TimeSchema("Timestamp of pose")},
-                    {"frame_id", Str("Frame of reference for pose position and orientation")},
-                    {"poses", ArrayOf(PoseSchema("A position and orientation for an object or reference frame in 3D space"),
-                                      "Poses in 3D space")}});
+  return Primitive(
+      "foxglove.PosesInFrame",
+      "An array of timestamped poses for an object or reference frame in 3D space",
+      {{"timestamp", TimeSchema("Timestamp of pose")},
+       {"frame_id", Str("Frame of reference for pose position and orientation")},
+       {"poses",
+        ArrayOf(
+            PoseSchema("A position and orientation for an object or reference frame in 3D space"),
+            "Poses in 3D space")}});
 }
 
 json StateSchema() {
   json nullable_number = {{"type", {"number", "null"}}};
   return Primitive(
-      "irslam.State", "irslamd's mission state and cleaning progress (irslam-foxglove, docs/foxglove.md)",
+      "irslam.State",
+      "irslamd's mission state and cleaning progress (irslam-foxglove, docs/foxglove.md)",
       {{"timestamp", TimeSchema("When irslam-foxglove received the status")},
-       {"connected", Bool("irslam-foxglove reaches irslamd (false: the other fields but error are empty)")},
+       {"connected",
+        Bool("irslam-foxglove reaches irslamd (false: the other fields but error are empty)")},
        {"error", Str("Why irslamd cannot be reached (empty when connected)")},
-       {"state", Str("Mission state (contracts §6: idle, wall_follow, model, go_to_p1, contour_follow, relocalize, "
-                     "clean, return_home, done, fault); \"disconnected\" when irslamd cannot be reached")},
+       {"state",
+        Str("Mission state (contracts §6: idle, wall_follow, model, go_to_p1, contour_follow, "
+            "relocalize, "
+            "clean, return_home, done, fault); \"disconnected\" when irslamd cannot be reached")},
        {"reason", Str("Why the mission is in this state (e.g. a fault's cause)")},
        {"behaviour", Str("The behaviour that drives the robot")},
        {"robot_time", Number("Robot time of the status, s")},
@@ -253,7 +315,8 @@ json StateSchema() {
        {"battery_v", Number("Battery voltage the controller reports, V")},
        {"estop", Bool("Emergency stop active")},
        {"cleaning_state", Str("Cleaning progress state (empty when no cleaning ran)")},
-       {"cleaning_fraction", Number("Part of the cleanable area covered, 0..1 (0 when no cleaning ran)")},
+       {"cleaning_fraction",
+        Number("Part of the cleanable area covered, 0..1 (0 when no cleaning ran)")},
        {"cleaning_covered_m2", Number("Area covered, m^2")},
        {"cleaning_total_m2", Number("Cleanable area, m^2")},
        {"cleaning_eta_s", nullable_number}});
@@ -319,7 +382,8 @@ bool IsNumber(const json& j) { return j.is_number() && std::isfinite(j.get<doubl
 std::optional<std::array<double, 3>> Pose3(const json& j) {
   if (!j.is_object() || !j.contains("pose")) return std::nullopt;
   const json& p = j["pose"];
-  if (!p.is_array() || p.size() != 3 || !IsNumber(p[0]) || !IsNumber(p[1]) || !IsNumber(p[2])) return std::nullopt;
+  if (!p.is_array() || p.size() != 3 || !IsNumber(p[0]) || !IsNumber(p[1]) || !IsNumber(p[2]))
+    return std::nullopt;
   return std::array<double, 3>{p[0].get<double>(), p[1].get<double>(), p[2].get<double>()};
 }
 
@@ -357,23 +421,14 @@ json Point(double x, double y, double z = 0) { return Vec3(x, y, z); }
 enum LineType { kLineStrip = 0, kLineLoop = 1, kLineList = 2 };
 
 json LinePrimitive(LineType type, json points, const Rgba& color, double thickness) {
-  return {{"type", static_cast<int>(type)},
-          {"pose", IdentityPose()},
-          {"thickness", thickness},
-          {"scale_invariant", false},
-          {"points", std::move(points)},
-          {"color", Color(color)},
-          {"colors", json::array()},
-          {"indices", json::array()}};
+  return {{"type", static_cast<int>(type)}, {"pose", IdentityPose()},      {"thickness", thickness},
+          {"scale_invariant", false},       {"points", std::move(points)}, {"color", Color(color)},
+          {"colors", json::array()},        {"indices", json::array()}};
 }
 
 json TextPrimitive(double x, double y, const std::string& text, const Rgba& color) {
-  return {{"pose", PoseJson(x, y, 0, 0.05)},
-          {"billboard", true},
-          {"font_size", 12.0},
-          {"scale_invariant", true},
-          {"color", Color(color)},
-          {"text", text}};
+  return {{"pose", PoseJson(x, y, 0, 0.05)}, {"billboard", true},     {"font_size", 12.0},
+          {"scale_invariant", true},         {"color", Color(color)}, {"text", text}};
 }
 
 // A scene entity with every primitive list present (empty where unused).
@@ -400,11 +455,13 @@ void AddMetadata(json* entity, const std::string& key, const std::string& value)
 
 // A SceneUpdate that replaces everything on its topic: delete all, then the entities.
 json ReplacingSceneUpdate(json entities, uint64_t t_ns) {
-  return {{"deletions", {{{"timestamp", TimeJson(t_ns)}, {"type", 1}, {"id", ""}}}}, {"entities", std::move(entities)}};
+  return {{"deletions", {{{"timestamp", TimeJson(t_ns)}, {"type", 1}, {"id", ""}}}},
+          {"entities", std::move(entities)}};
 }
 
 std::string IdText(const json& j) {
-  if (j.is_object() && j.contains("id") && j["id"].is_number_integer()) return std::to_string(j["id"].get<int64_t>());
+  if (j.is_object() && j.contains("id") && j["id"].is_number_integer())
+    return std::to_string(j["id"].get<int64_t>());
   return "?";
 }
 
@@ -415,7 +472,8 @@ std::string Fixed(double v, int digits) {
 }
 
 json BoxLoop(const std::array<double, 4>& b, double z = 0) {
-  return json::array({Point(b[0], b[1], z), Point(b[2], b[1], z), Point(b[2], b[3], z), Point(b[0], b[3], z)});
+  return json::array(
+      {Point(b[0], b[1], z), Point(b[2], b[1], z), Point(b[2], b[3], z), Point(b[0], b[3], z)});
 }
 
 }  // namespace
@@ -433,11 +491,14 @@ std::optional<json> FrameTransformMessage(const json& status, uint64_t t_ns) {
 std::optional<json> PoseMessage(const json& status, uint64_t t_ns) {
   const auto p = Pose3(status);
   if (!p) return std::nullopt;
-  return json{{"timestamp", TimeJson(t_ns)}, {"frame_id", kMapFrame}, {"pose", PoseJson((*p)[0], (*p)[1], (*p)[2])}};
+  return json{{"timestamp", TimeJson(t_ns)},
+              {"frame_id", kMapFrame},
+              {"pose", PoseJson((*p)[0], (*p)[1], (*p)[2])}};
 }
 
 std::optional<json> IrMessage(const json& status, const RobotShape& robot, uint64_t t_ns) {
-  if (!status.is_object() || !status.contains("ir_ranges") || !status["ir_ranges"].is_array()) return std::nullopt;
+  if (!status.is_object() || !status.contains("ir_ranges") || !status["ir_ranges"].is_array())
+    return std::nullopt;
   const json& ranges = status["ir_ranges"];
   json hits = json::array(), misses = json::array(), spheres = json::array();
   json rays = Entity("ir", kRobotFrame, t_ns, true);
@@ -450,7 +511,9 @@ std::optional<json> IrMessage(const json& status, const RobotShape& robot, uint6
     list.push_back(Point(m.x, m.y));
     list.push_back(Point(ex, ey));
     if (hit) {
-      spheres.push_back({{"pose", PoseJson(ex, ey, 0)}, {"size", Vec3(0.04, 0.04, 0.04)}, {"color", Color(kRed)}});
+      spheres.push_back({{"pose", PoseJson(ex, ey, 0)},
+                         {"size", Vec3(0.04, 0.04, 0.04)},
+                         {"color", Color(kRed)}});
     }
     AddMetadata(&rays, "ir" + std::to_string(i), hit ? Fixed(r, 3) : "none");
   }
@@ -466,34 +529,42 @@ std::optional<json> IrMessage(const json& status, const RobotShape& robot, uint6
     circle.push_back(Point(robot.radius_m * std::cos(a), robot.radius_m * std::sin(a)));
   }
   body["lines"].push_back(LinePrimitive(kLineLoop, circle, kBlue, 0.01));
-  body["lines"].push_back(LinePrimitive(kLineList, json::array({Point(0, 0), Point(robot.radius_m, 0)}), kBlue, 0.01));
+  body["lines"].push_back(
+      LinePrimitive(kLineList, json::array({Point(0, 0), Point(robot.radius_m, 0)}), kBlue, 0.01));
   return ReplacingSceneUpdate(json::array({rays, body}), t_ns);
 }
 
 json StateMessage(const json& status, bool connected, const std::string& error, uint64_t t_ns) {
   const auto p = connected ? Pose3(status) : std::nullopt;
-  json cleaning = connected && status.is_object() && status.contains("cleaning") ? status["cleaning"] : json();
-  json eta = cleaning.is_object() && cleaning.contains("eta_s") && IsNumber(cleaning["eta_s"]) ? cleaning["eta_s"] : json();
-  const json controller = connected && status.is_object() && status.contains("controller") ? status["controller"] : json();
-  const json safety = connected && status.is_object() && status.contains("safety") ? status["safety"] : json();
-  return {{"timestamp", TimeJson(t_ns)},
-          {"connected", connected},
-          {"error", connected ? "" : error},
-          {"state", connected ? StringOr(status, "state") : "disconnected"},
-          {"reason", connected ? StringOr(status, "reason") : ""},
-          {"behaviour", connected ? StringOr(status, "behaviour") : ""},
-          {"robot_time", connected ? NumberOr(status, "robot_time", 0) : 0.0},
-          {"pose", {{"x", p ? (*p)[0] : 0.0}, {"y", p ? (*p)[1] : 0.0}, {"theta", p ? (*p)[2] : 0.0}}},
-          {"lines", connected ? static_cast<int64_t>(NumberOr(status, "lines", 0)) : 0},
-          {"objects", connected ? static_cast<int64_t>(NumberOr(status, "objects", 0)) : 0},
-          {"controller_alive", controller.is_object() && controller.value("alive", false)},
-          {"battery_v", NumberOr(controller, "battery", 0)},
-          {"estop", safety.is_object() && safety.value("estop", false)},
-          {"cleaning_state", StringOr(cleaning, "state")},
-          {"cleaning_fraction", NumberOr(cleaning, "fraction", 0)},
-          {"cleaning_covered_m2", NumberOr(cleaning, "covered_m2", 0)},
-          {"cleaning_total_m2", NumberOr(cleaning, "total_m2", 0)},
-          {"cleaning_eta_s", eta}};
+  json cleaning =
+      connected && status.is_object() && status.contains("cleaning") ? status["cleaning"] : json();
+  json eta = cleaning.is_object() && cleaning.contains("eta_s") && IsNumber(cleaning["eta_s"])
+                 ? cleaning["eta_s"]
+                 : json();
+  const json controller = connected && status.is_object() && status.contains("controller")
+                              ? status["controller"]
+                              : json();
+  const json safety =
+      connected && status.is_object() && status.contains("safety") ? status["safety"] : json();
+  return {
+      {"timestamp", TimeJson(t_ns)},
+      {"connected", connected},
+      {"error", connected ? "" : error},
+      {"state", connected ? StringOr(status, "state") : "disconnected"},
+      {"reason", connected ? StringOr(status, "reason") : ""},
+      {"behaviour", connected ? StringOr(status, "behaviour") : ""},
+      {"robot_time", connected ? NumberOr(status, "robot_time", 0) : 0.0},
+      {"pose", {{"x", p ? (*p)[0] : 0.0}, {"y", p ? (*p)[1] : 0.0}, {"theta", p ? (*p)[2] : 0.0}}},
+      {"lines", connected ? static_cast<int64_t>(NumberOr(status, "lines", 0)) : 0},
+      {"objects", connected ? static_cast<int64_t>(NumberOr(status, "objects", 0)) : 0},
+      {"controller_alive", controller.is_object() && controller.value("alive", false)},
+      {"battery_v", NumberOr(controller, "battery", 0)},
+      {"estop", safety.is_object() && safety.value("estop", false)},
+      {"cleaning_state", StringOr(cleaning, "state")},
+      {"cleaning_fraction", NumberOr(cleaning, "fraction", 0)},
+      {"cleaning_covered_m2", NumberOr(cleaning, "covered_m2", 0)},
+      {"cleaning_total_m2", NumberOr(cleaning, "total_m2", 0)},
+      {"cleaning_eta_s", eta}};
 }
 
 json TrajectoryMessage(const json& map, uint64_t t_ns, size_t max_poses) {
@@ -522,8 +593,10 @@ std::vector<std::array<double, 2>> LineEllipse(const json& line, int points) {
   double srr = 0, stt = 0;
   if (line.contains("cov") && line["cov"].is_array() && line["cov"].size() == 2) {
     const json& c = line["cov"];
-    if (c[0].is_array() && c[0].size() == 2 && IsNumber(c[0][0])) srr = std::sqrt(std::max(0.0, c[0][0].get<double>()));
-    if (c[1].is_array() && c[1].size() == 2 && IsNumber(c[1][1])) stt = std::sqrt(std::max(0.0, c[1][1].get<double>()));
+    if (c[0].is_array() && c[0].size() == 2 && IsNumber(c[0][0]))
+      srr = std::sqrt(std::max(0.0, c[0][0].get<double>()));
+    if (c[1].is_array() && c[1].size() == 2 && IsNumber(c[1][1]))
+      stt = std::sqrt(std::max(0.0, c[1][1].get<double>()));
   }
   const double dx = (*p1)[0] - (*p0)[0], dy = (*p1)[1] - (*p0)[1];
   const double len = std::hypot(dx, dy);
@@ -547,15 +620,18 @@ json LinesMessage(const json& map, uint64_t t_ns) {
     if (!p0 || !p1) continue;
     json e = Entity("line/" + IdText(l), kMapFrame, t_ns);
     e["lines"].push_back(LinePrimitive(
-        kLineList, json::array({Point((*p0)[0], (*p0)[1]), Point((*p1)[0], (*p1)[1])}), kBlack, 0.03));
+        kLineList, json::array({Point((*p0)[0], (*p0)[1]), Point((*p1)[0], (*p1)[1])}), kBlack,
+        0.03));
     json ellipse = json::array();
     for (const auto& q : LineEllipse(l)) ellipse.push_back(Point(q[0], q[1]));
     e["lines"].push_back(LinePrimitive(kLineLoop, ellipse, kMagenta, 0.008));
-    e["texts"].push_back(TextPrimitive(0.5 * ((*p0)[0] + (*p1)[0]), 0.5 * ((*p0)[1] + (*p1)[1]), IdText(l), kBlack));
+    e["texts"].push_back(
+        TextPrimitive(0.5 * ((*p0)[0] + (*p1)[0]), 0.5 * ((*p0)[1] + (*p1)[1]), IdText(l), kBlack));
     AddMetadata(&e, "rho", Fixed(NumberOr(l, "rho", 0), 4));
     AddMetadata(&e, "theta", Fixed(NumberOr(l, "theta", 0), 4));
     AddMetadata(&e, "length", Fixed(NumberOr(l, "length", 0), 3));
-    AddMetadata(&e, "observations", std::to_string(static_cast<int64_t>(NumberOr(l, "observations", 0))));
+    AddMetadata(&e, "observations",
+                std::to_string(static_cast<int64_t>(NumberOr(l, "observations", 0))));
     entities.push_back(std::move(e));
   }
   return ReplacingSceneUpdate(std::move(entities), t_ns);
@@ -570,12 +646,14 @@ json ObjectsMessage(const json& map, uint64_t t_ns) {
     const Rgba& c = complete ? kGreen : kOrange;
     json e = Entity("object/" + IdText(o), kMapFrame, t_ns);
     const double cx = 0.5 * ((*b)[0] + (*b)[2]), cy = 0.5 * ((*b)[1] + (*b)[3]);
-    e["cubes"].push_back({{"pose", PoseJson(cx, cy, 0, 0.025)},
-                          {"size", Vec3(std::max(0.0, (*b)[2] - (*b)[0]), std::max(0.0, (*b)[3] - (*b)[1]), 0.05)},
-                          {"color", Color(c, 0.35)}});
+    e["cubes"].push_back(
+        {{"pose", PoseJson(cx, cy, 0, 0.025)},
+         {"size", Vec3(std::max(0.0, (*b)[2] - (*b)[0]), std::max(0.0, (*b)[3] - (*b)[1]), 0.05)},
+         {"color", Color(c, 0.35)}});
     e["lines"].push_back(LinePrimitive(kLineLoop, BoxLoop(*b, 0.05), c, 0.02));
     const std::string kind = StringOr(o, "kind");
-    e["texts"].push_back(TextPrimitive(cx, cy, "object " + IdText(o) + " " + kind + (complete ? "" : " (incomplete)"), c));
+    e["texts"].push_back(TextPrimitive(
+        cx, cy, "object " + IdText(o) + " " + kind + (complete ? "" : " (incomplete)"), c));
     AddMetadata(&e, "kind", kind);
     AddMetadata(&e, "complete", complete ? "true" : "false");
     AddMetadata(&e, "lines", o.contains("lines") ? o["lines"].dump() : "[]");
@@ -586,8 +664,11 @@ json ObjectsMessage(const json& map, uint64_t t_ns) {
 
 json RoomMessage(const json& map, uint64_t t_ns) {
   json entities = json::array();
-  const json room = map.is_object() && map.contains("room") && map["room"].is_object() ? map["room"] : json::object();
-  const json walls = room.contains("walls") && room["walls"].is_object() ? room["walls"] : json::object();
+  const json room = map.is_object() && map.contains("room") && map["room"].is_object()
+                        ? map["room"]
+                        : json::object();
+  const json walls =
+      room.contains("walls") && room["walls"].is_object() ? room["walls"] : json::object();
   bool every_side = true;
   for (const char* side : {"bottom", "right", "top", "left"}) {
     if (!walls.contains(side) || !walls[side].is_array() || walls[side].empty()) every_side = false;
@@ -598,7 +679,8 @@ json RoomMessage(const json& map, uint64_t t_ns) {
   json e = Entity("room", kMapFrame, t_ns);
   if (box) {
     e["lines"].push_back(LinePrimitive(kLineLoop, BoxLoop(*box, 0.01), c, 0.015));
-    e["texts"].push_back(TextPrimitive((*box)[0], (*box)[1], complete ? "room" : "room (incomplete)", c));
+    e["texts"].push_back(
+        TextPrimitive((*box)[0], (*box)[1], complete ? "room" : "room (incomplete)", c));
   }
   // The wall lines by side, drawn over the map's lines.
   json wall_points = json::array();

@@ -8,9 +8,9 @@
 #ifndef IRSLAM_DAEMON_FOXGLOVE_MESSAGES_H_
 #define IRSLAM_DAEMON_FOXGLOVE_MESSAGES_H_
 
-#include <nlohmann/json.hpp>
 #include <array>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <vector>
 
@@ -49,10 +49,12 @@ std::optional<nlohmann::json> FrameTransformMessage(const nlohmann::json& status
 std::optional<nlohmann::json> PoseMessage(const nlohmann::json& status, uint64_t t_ns);
 // The IR rays of the last scan in base_link (a LINE_LIST from each mount to its
 // reading; no reading: grey, max range) plus the body outline.
-std::optional<nlohmann::json> IrMessage(const nlohmann::json& status, const RobotShape& robot, uint64_t t_ns);
+std::optional<nlohmann::json> IrMessage(const nlohmann::json& status, const RobotShape& robot,
+                                        uint64_t t_ns);
 // irslam.State: state, reason, cleaning progress (connected=false and the error
 // when irslamd cannot be reached: pass a null status).
-nlohmann::json StateMessage(const nlohmann::json& status, bool connected, const std::string& error, uint64_t t_ns);
+nlohmann::json StateMessage(const nlohmann::json& status, bool connected, const std::string& error,
+                            uint64_t t_ns);
 
 // From a map (contracts §4).
 // The trajectory, at most max_poses of it (evenly thinned, the last pose kept).

@@ -32,7 +32,8 @@ json StatusJson(Level level, const std::string& message) {
   return {{"op", "status"}, {"level", static_cast<int>(level)}, {"message", message}};
 }
 
-std::string MessageDataFrame(uint32_t subscription_id, uint64_t log_time_ns, std::string_view payload) {
+std::string MessageDataFrame(uint32_t subscription_id, uint64_t log_time_ns,
+                             std::string_view payload) {
   std::string f;
   f.reserve(kMessageDataHeaderBytes + payload.size());
   f.push_back(static_cast<char>(kOpMessageData));
@@ -135,7 +136,8 @@ std::optional<ClientOp> ParseClientOp(std::string_view text, std::string* error)
 }
 
 json TimeJson(uint64_t t_ns) {
-  return {{"sec", static_cast<uint32_t>(t_ns / 1000000000u)}, {"nsec", static_cast<uint32_t>(t_ns % 1000000000u)}};
+  return {{"sec", static_cast<uint32_t>(t_ns / 1000000000u)},
+          {"nsec", static_cast<uint32_t>(t_ns % 1000000000u)}};
 }
 
 }  // namespace irslam::foxglove

@@ -5,8 +5,8 @@
 #ifndef IRSLAM_DAEMON_FOXGLOVE_PROTOCOL_H_
 #define IRSLAM_DAEMON_FOXGLOVE_PROTOCOL_H_
 
-#include <nlohmann/json.hpp>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -38,7 +38,8 @@ nlohmann::json StatusJson(Level level, const std::string& message);
 
 // Message Data (opcode 0x01): u8 opcode, u32 LE subscription id, u64 LE log time
 // (ns), then the payload.
-std::string MessageDataFrame(uint32_t subscription_id, uint64_t log_time_ns, std::string_view payload);
+std::string MessageDataFrame(uint32_t subscription_id, uint64_t log_time_ns,
+                             std::string_view payload);
 
 // Whether a Sec-WebSocket-Protocol request header offers foxglove.websocket.v1
 // (a comma-separated list).
@@ -50,7 +51,7 @@ struct ClientOp {
   Kind kind = Kind::kUnsupported;
   std::string op;  // as sent (for kUnsupported: to name it in a status reply)
   std::vector<std::pair<uint32_t, uint32_t>> subscribe;  // (subscription id, channel id)
-  std::vector<uint32_t> unsubscribe;                      // subscription ids
+  std::vector<uint32_t> unsubscribe;                     // subscription ids
 };
 
 // Parses a text frame. Malformed input (not JSON, not an object, no string "op",

@@ -21,7 +21,8 @@ using boost::system::error_code;
 namespace {
 
 std::chrono::steady_clock::duration Seconds(double s) {
-  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
+  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(s));
 }
 
 std::string PeerName(const tcp::socket& s) {
@@ -46,8 +47,9 @@ class Server::Session : public std::enable_shared_from_this<Session> {
     beast::get_lowest_layer(ws_).expires_after(Seconds(server_->options_.handshake_timeout_s));
     parser_.emplace();
     parser_->body_limit(4096);
-    http::async_read(beast::get_lowest_layer(ws_), buffer_, *parser_,
-                     [self = shared_from_this()](const error_code& ec, size_t) { self->OnRequest(ec); });
+    http::async_read(
+        beast::get_lowest_layer(ws_), buffer_, *parser_,
+        [self = shared_from_this()](const error_code& ec, size_t) { self->OnRequest(ec); });
   }
 
   bool Subscribed(uint32_t channel) const {
@@ -58,15 +60,14 @@ class Server::Session : public std::enable_shared_from_this<Session> {
   }
 
   // Message data for every subscription of this client to channel.
-  void SendData(uint32_t channel, uint64_t t_ns, const std::shared_ptr<const std::string>& payload) {
+  void SendData(uint32_t channel, uint64_t t_ns,
+                const std::shared_ptr<const std::string>& payload) {
     for (const auto& [id, ch] : subs_) {
       if (ch == channel) Enqueue(Frame{MessageDataFrame(id, t_ns, {}), payload, true}, true);
     }
   }
 
-  void SendText(std::string text) {
-    Enqueue(Frame{std::move(text), nullptr, false}, false);
-  }
+  void SendText(std::string text) { Enqueue(Frame{std::move(text), nullptr, false}, false); }
 
   // Closes the connection (a close frame when the websocket is open).
   void Close(websocket::close_code code, const std::string& why) {
@@ -75,7 +76,8 @@ class Server::Session : public std::enable_shared_from_this<Session> {
     subs_.clear();
     // The frame being written stays until its write completes (its buffers).
     while (queue_.size() > (writing_ ? 1u : 0u)) queue_.pop_back();
-    if (!why.empty()) std::fprintf(stderr, "<6>foxglove: client %s: closed: %s\n", peer_.c_str(), why.c_str());
+    if (!why.empty())
+      std::fprintf(stderr, "<6>foxglove: client %s: closed: %s\n", peer_.c_str(), why.c_str());
     auto self = shared_from_this();
     server_->Remove(this);
     if (open_ && !writing_) {
@@ -109,12 +111,15 @@ class Server::Session : public std::enable_shared_from_this<Session> {
       return Close(websocket::close_code::normal, "no websocket handshake: " + ec.message());
     }
     auto req = parser_->release();
-    if (!websocket::is_upgrade(req)) return Reject(http::status::bad_request, "a Foxglove WebSocket server: connect with ws://\n");
+    if (!websocket::is_upgrade(req))
+      return Reject(http::status::bad_request, "a Foxglove WebSocket server: connect with ws://\n");
     if (!OffersSubprotocol(std::string(req[http::field::sec_websocket_protocol]))) {
-      return Reject(http::status::bad_request, "the client must offer the subprotocol foxglove.websocket.v1\n");
+      return Reject(http::status::bad_request,
+                    "the client must offer the subprotocol foxglove.websocket.v1\n");
     }
     beast::get_lowest_layer(ws_).expires_never();
-    websocket::stream_base::timeout t = websocket::stream_base::timeout::suggested(beast::role_type::server);
+    websocket::stream_base::timeout t =
+        websocket::stream_base::timeout::suggested(beast::role_type::server);
     t.handshake_timeout = Seconds(server_->options_.handshake_timeout_s);
     t.idle_timeout = Seconds(server_->options_.idle_timeout_s);
     t.keep_alive_pings = true;
@@ -138,8 +143,9 @@ class Server::Session : public std::enable_shared_from_this<Session> {
     res->prepare_payload();
     closing_ = true;
     server_->Remove(this);
-    http::async_write(beast::get_lowest_layer(ws_), *res,
-                      [self = shared_from_this(), res](const error_code&, size_t) { self->Shutdown(); });
+    http::async_write(
+        beast::get_lowest_layer(ws_), *res,
+        [self = shared_from_this(), res](const error_code&, size_t) { self->Shutdown(); });
   }
 
   void OnAccept(const error_code& ec) {
@@ -156,17 +162,20 @@ class Server::Session : public std::enable_shared_from_this<Session> {
   }
 
   void Read() {
-    ws_.async_read(buffer_, [self = shared_from_this()](const error_code& ec, size_t) { self->OnRead(ec); });
+    ws_.async_read(buffer_,
+                   [self = shared_from_this()](const error_code& ec, size_t) { self->OnRead(ec); });
   }
 
   void OnRead(const error_code& ec) {
     if (closing_) return;
     if (ec) {
-      if (ec == websocket::error::closed) return Close(websocket::close_code::normal, "by the client");
+      if (ec == websocket::error::closed)
+        return Close(websocket::close_code::normal, "by the client");
       if (ec == websocket::error::message_too_big) return BadInput("message over the size limit");
       return Close(websocket::close_code::normal, ec.message());
     }
-    if (!ws_.got_text()) return BadInput("a binary message (this server takes no client publishing)");
+    if (!ws_.got_text())
+      return BadInput("a binary message (this server takes no client publishing)");
     const std::string text = beast::buffers_to_string(buffer_.data());
     buffer_.consume(buffer_.size());
     std::string error;
@@ -179,12 +188,16 @@ class Server::Session : public std::enable_shared_from_this<Session> {
       case ClientOp::Kind::kUnsubscribe:
         for (const auto id : op->unsubscribe) {
           if (subs_.erase(id) == 0) {
-            SendText(StatusJson(Level::kWarning, "unsubscribe: no subscription " + std::to_string(id)).dump());
+            SendText(
+                StatusJson(Level::kWarning, "unsubscribe: no subscription " + std::to_string(id))
+                    .dump());
           }
         }
         break;
       case ClientOp::Kind::kUnsupported:
-        SendText(StatusJson(Level::kWarning, "op \"" + op->op + "\" is not supported by irslam-foxglove").dump());
+        SendText(
+            StatusJson(Level::kWarning, "op \"" + op->op + "\" is not supported by irslam-foxglove")
+                .dump());
         break;
     }
     if (!closing_) Read();
@@ -194,15 +207,20 @@ class Server::Session : public std::enable_shared_from_this<Session> {
     bool known = false;
     for (const auto& c : server_->channels_) known = known || c.id == channel;
     if (!known) {
-      SendText(StatusJson(Level::kError, "subscribe: no channel " + std::to_string(channel)).dump());
+      SendText(
+          StatusJson(Level::kError, "subscribe: no channel " + std::to_string(channel)).dump());
       return;
     }
     if (subs_.count(id) != 0) {
-      SendText(StatusJson(Level::kError, "subscribe: subscription id " + std::to_string(id) + " is in use").dump());
+      SendText(StatusJson(Level::kError,
+                          "subscribe: subscription id " + std::to_string(id) + " is in use")
+                   .dump());
       return;
     }
     if (Subscribed(channel)) {
-      SendText(StatusJson(Level::kError, "subscribe: already subscribed to channel " + std::to_string(channel)).dump());
+      SendText(StatusJson(Level::kError,
+                          "subscribe: already subscribed to channel " + std::to_string(channel))
+                   .dump());
       return;
     }
     subs_[id] = channel;
@@ -224,7 +242,8 @@ class Server::Session : public std::enable_shared_from_this<Session> {
   void Enqueue(Frame f, bool droppable) {
     if (closing_ || !open_) return;
     const ServerOptions& o = server_->options_;
-    const bool full = queue_.size() >= o.max_queued_frames || queued_bytes_ + f.size() > o.max_queued_bytes;
+    const bool full =
+        queue_.size() >= o.max_queued_frames || queued_bytes_ + f.size() > o.max_queued_bytes;
     if (full && droppable) {
       ++server_->stats_.dropped;
       if (++dropped_ == 1 || dropped_ % 1000 == 0) {
@@ -233,7 +252,8 @@ class Server::Session : public std::enable_shared_from_this<Session> {
       }
       return;
     }
-    if (full && (queue_.size() >= 2 * o.max_queued_frames || queued_bytes_ > 2 * o.max_queued_bytes)) {
+    if (full &&
+        (queue_.size() >= 2 * o.max_queued_frames || queued_bytes_ > 2 * o.max_queued_bytes)) {
       return Close(websocket::close_code::try_again_later, "does not read");
     }
     if (droppable) ++server_->stats_.sent;
@@ -246,9 +266,10 @@ class Server::Session : public std::enable_shared_from_this<Session> {
     writing_ = true;
     const Frame& f = queue_.front();
     ws_.binary(f.binary);
-    std::array<asio::const_buffer, 2> buffers{asio::buffer(f.head),
-                                              f.payload ? asio::buffer(*f.payload) : asio::const_buffer()};
-    ws_.async_write(buffers, [self = shared_from_this()](const error_code& ec, size_t) { self->OnWrite(ec); });
+    std::array<asio::const_buffer, 2> buffers{
+        asio::buffer(f.head), f.payload ? asio::buffer(*f.payload) : asio::const_buffer()};
+    ws_.async_write(
+        buffers, [self = shared_from_this()](const error_code& ec, size_t) { self->OnWrite(ec); });
   }
 
   void OnWrite(const error_code& ec) {
@@ -288,7 +309,8 @@ Server::Server(asio::io_context& io, std::vector<Channel> channels, ServerOption
   std::random_device rd;
   const auto now = std::chrono::system_clock::now().time_since_epoch();
   const std::string session =
-      std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(now).count()) + "-" + std::to_string(rd() % 100000);
+      std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(now).count()) + "-" +
+      std::to_string(rd() % 100000);
   server_info_ = ServerInfoJson(options_.name, session).dump();
   advertise_ = AdvertiseJson(channels_).dump();
 }
@@ -302,8 +324,8 @@ bool Server::Listen(const tcp::endpoint& endpoint, std::string* error) {
   if (!ec) acceptor_.bind(endpoint, ec);
   if (!ec) acceptor_.listen(asio::socket_base::max_listen_connections, ec);
   if (ec) {
-    *error = "cannot listen on " + endpoint.address().to_string() + ":" + std::to_string(endpoint.port()) + ": " +
-             ec.message();
+    *error = "cannot listen on " + endpoint.address().to_string() + ":" +
+             std::to_string(endpoint.port()) + ": " + ec.message();
     error_code ignored;
     acceptor_.close(ignored);
     return false;
@@ -323,8 +345,8 @@ void Server::Accept() {
     if (!ec) {
       if (sessions_.size() >= options_.max_clients) {
         ++stats_.rejected;
-        std::fprintf(stderr, "<5>foxglove: client %s: refused: %zu clients already\n", PeerName(socket).c_str(),
-                     sessions_.size());
+        std::fprintf(stderr, "<5>foxglove: client %s: refused: %zu clients already\n",
+                     PeerName(socket).c_str(), sessions_.size());
         error_code ignored;
         socket.close(ignored);
       } else {

@@ -24,11 +24,11 @@ namespace irslam::foxglove {
 struct ServerOptions {
   std::string name = "irslam-foxglove";
   size_t max_clients = 16;
-  size_t max_queued_frames = 64;            // per client; data beyond it is dropped
-  size_t max_queued_bytes = 16u << 20;      // per client
+  size_t max_queued_frames = 64;        // per client; data beyond it is dropped
+  size_t max_queued_bytes = 16u << 20;  // per client
   size_t max_client_message_bytes = 64u << 10;
   double handshake_timeout_s = 10;
-  double idle_timeout_s = 30;               // a client that answers no ping this long is closed
+  double idle_timeout_s = 30;  // a client that answers no ping this long is closed
 };
 
 struct ServerStats {

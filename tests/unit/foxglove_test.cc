@@ -25,7 +25,8 @@ constexpr uint64_t kT = 1700000000123456789ull;
 TEST(FoxgloveProtocolTest, MessageDataFrameIsOpcodeSubscriptionTimeLittleEndianThenPayload) {
   const std::string f = MessageDataFrame(0x04030201u, 0x0c0b0a0908070605ull, "{\"a\":1}");
   ASSERT_EQ(f.size(), 13u + 7u);
-  const unsigned char expected[13] = {0x01, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x0a, 0x0b, 0x0c};
+  const unsigned char expected[13] = {0x01, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06,
+                                      0x07, 0x08, 0x09, 0x0a, 0x0b, 0x0c};
   EXPECT_EQ(std::memcmp(f.data(), expected, 13), 0);
   EXPECT_EQ(f.substr(13), "{\"a\":1}");
   EXPECT_EQ(kMessageDataHeaderBytes, 13u);
@@ -64,8 +65,9 @@ TEST(FoxgloveProtocolTest, SchemasHaveFoxglovesFieldsAndEnums) {
   const json su = SchemaFor("foxglove.SceneUpdate");
   const json& entity = su["properties"]["entities"]["items"];
   EXPECT_EQ(entity["title"], "foxglove.SceneEntity");
-  for (const char* k : {"timestamp", "frame_id", "id", "lifetime", "frame_locked", "metadata", "arrows", "cubes",
-                        "spheres", "cylinders", "lines", "triangles", "texts", "models"}) {
+  for (const char* k :
+       {"timestamp", "frame_id", "id", "lifetime", "frame_locked", "metadata", "arrows", "cubes",
+        "spheres", "cylinders", "lines", "triangles", "texts", "models"}) {
     EXPECT_TRUE(entity["properties"].contains(k)) << k;
   }
   const json& line = entity["properties"]["lines"]["items"];
@@ -76,20 +78,24 @@ TEST(FoxgloveProtocolTest, SchemasHaveFoxglovesFieldsAndEnums) {
   EXPECT_EQ(type["oneOf"][1]["const"], 1);
   EXPECT_EQ(type["oneOf"][2]["title"], "LINE_LIST");
   EXPECT_EQ(type["oneOf"][2]["const"], 2);
-  EXPECT_EQ(su["properties"]["deletions"]["items"]["properties"]["type"]["oneOf"][1]["title"], "ALL");
+  EXPECT_EQ(su["properties"]["deletions"]["items"]["properties"]["type"]["oneOf"][1]["title"],
+            "ALL");
   const json ft = SchemaFor("foxglove.FrameTransform");
-  for (const char* k : {"timestamp", "parent_frame_id", "child_frame_id", "translation", "rotation"}) {
+  for (const char* k :
+       {"timestamp", "parent_frame_id", "child_frame_id", "translation", "rotation"}) {
     EXPECT_TRUE(ft["properties"].contains(k)) << k;
   }
   EXPECT_EQ(ft["properties"]["rotation"]["title"], "foxglove.Quaternion");
   EXPECT_EQ(ft["properties"]["timestamp"]["properties"]["nsec"]["maximum"], 999999999);
-  EXPECT_EQ(SchemaFor("foxglove.PosesInFrame")["properties"]["poses"]["items"]["title"], "foxglove.Pose");
+  EXPECT_EQ(SchemaFor("foxglove.PosesInFrame")["properties"]["poses"]["items"]["title"],
+            "foxglove.Pose");
 }
 
 TEST(FoxgloveProtocolTest, ParsesSubscribeAndUnsubscribe) {
   std::string error;
-  auto op = ParseClientOp(R"({"op":"subscribe","subscriptions":[{"id":0,"channelId":3},{"id":7,"channelId":5}]})",
-                          &error);
+  auto op = ParseClientOp(
+      R"({"op":"subscribe","subscriptions":[{"id":0,"channelId":3},{"id":7,"channelId":5}]})",
+      &error);
   ASSERT_TRUE(op) << error;
   EXPECT_EQ(op->kind, ClientOp::Kind::kSubscribe);
   ASSERT_EQ(op->subscribe.size(), 2u);
@@ -107,12 +113,13 @@ TEST(FoxgloveProtocolTest, ParsesSubscribeAndUnsubscribe) {
 
 TEST(FoxgloveProtocolTest, RejectsMalformedClientOps) {
   std::string error;
-  for (const char* bad : {"not json", "[1,2]", R"({"subscriptions":[]})", R"({"op":3})",
-                          R"({"op":"subscribe"})", R"({"op":"subscribe","subscriptions":[{"id":-1,"channelId":1}]})",
-                          R"({"op":"subscribe","subscriptions":[{"id":1.5,"channelId":1}]})",
-                          R"({"op":"subscribe","subscriptions":[{"id":1}]})",
-                          R"({"op":"subscribe","subscriptions":[{"id":4294967296,"channelId":1}]})",
-                          R"({"op":"unsubscribe","subscriptionIds":["a"]})"}) {
+  for (const char* bad :
+       {"not json", "[1,2]", R"({"subscriptions":[]})", R"({"op":3})", R"({"op":"subscribe"})",
+        R"({"op":"subscribe","subscriptions":[{"id":-1,"channelId":1}]})",
+        R"({"op":"subscribe","subscriptions":[{"id":1.5,"channelId":1}]})",
+        R"({"op":"subscribe","subscriptions":[{"id":1}]})",
+        R"({"op":"subscribe","subscriptions":[{"id":4294967296,"channelId":1}]})",
+        R"({"op":"unsubscribe","subscriptionIds":["a"]})"}) {
     error.clear();
     EXPECT_FALSE(ParseClientOp(bad, &error)) << bad;
     EXPECT_FALSE(error.empty()) << bad;
@@ -224,7 +231,7 @@ TEST(FoxgloveMessagesTest, IrRaysGoFromEachMountToItsReading) {
   EXPECT_EQ(rays["frame_id"], "base_link");
   EXPECT_EQ(rays["frame_locked"], true);
   const json& hits = rays["lines"][0];
-  EXPECT_EQ(hits["type"], 2);  // LINE_LIST
+  EXPECT_EQ(hits["type"], 2);            // LINE_LIST
   ASSERT_EQ(hits["points"].size(), 6u);  // three readings
   // Sensor 0 looks right (-90 deg): its reading 0.5 m ends at y = -0.55.
   EXPECT_NEAR(hits["points"][1]["x"].get<double>(), 0.0, 1e-12);
@@ -294,7 +301,8 @@ TEST(FoxgloveMessagesTest, ObjectsAreColouredByCompleteness) {
   EXPECT_DOUBLE_EQ(cube["size"]["y"].get<double>(), 1.0);
   EXPECT_GT(cube["color"]["g"].get<double>(), cube["color"]["r"].get<double>());  // green
   const json& open = m["entities"][1];
-  EXPECT_GT(open["cubes"][0]["color"]["r"].get<double>(), open["cubes"][0]["color"]["g"].get<double>());  // orange
+  EXPECT_GT(open["cubes"][0]["color"]["r"].get<double>(),
+            open["cubes"][0]["color"]["g"].get<double>());  // orange
   EXPECT_EQ(open["lines"][0]["type"], 1);
   EXPECT_EQ(open["lines"][0]["points"].size(), 4u);
   EXPECT_EQ(open["texts"][0]["text"], "object 2 wall_contact (incomplete)");
@@ -308,7 +316,7 @@ TEST(FoxgloveMessagesTest, RoomIsTheBoxAndTheWallLines) {
   EXPECT_EQ(e["lines"][0]["type"], 1);
   EXPECT_DOUBLE_EQ(e["lines"][0]["points"][2]["x"].get<double>(), 4.0);
   EXPECT_DOUBLE_EQ(e["lines"][0]["points"][2]["y"].get<double>(), 3.0);
-  EXPECT_EQ(e["lines"][1]["points"].size(), 4u);  // walls 1 and 3
+  EXPECT_EQ(e["lines"][1]["points"].size(), 4u);          // walls 1 and 3
   EXPECT_EQ(e["texts"][0]["text"], "room (incomplete)");  // no top or left wall
   map["room"]["walls"]["top"] = {1};
   map["room"]["walls"]["left"] = {3};
@@ -332,7 +340,9 @@ class FoxgloveServerTest : public ::testing::Test {
     o.max_queued_frames = 8;
     server_ = std::make_unique<Server>(io_, IrslamChannels(), o);
     std::string error;
-    ASSERT_TRUE(server_->Listen(tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), 0), &error)) << error;
+    ASSERT_TRUE(
+        server_->Listen(tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), 0), &error))
+        << error;
     port_ = server_->local_endpoint().port();
   }
 
@@ -351,7 +361,8 @@ class FoxgloveServerTest : public ::testing::Test {
 // A client on its own io_context, stepped by the test.
 struct Client {
   explicit Client(unsigned short port, const char* subprotocol = "foxglove.websocket.v1") : ws(io) {
-    beast::get_lowest_layer(ws).connect(tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), port));
+    beast::get_lowest_layer(ws).connect(
+        tcp::endpoint(boost::asio::ip::make_address("127.0.0.1"), port));
     ws.set_option(websocket::stream_base::decorator([subprotocol](websocket::request_type& req) {
       req.set(beast::http::field::sec_websocket_protocol, subprotocol);
     }));
@@ -382,19 +393,32 @@ struct Client {
 TEST_F(FoxgloveServerTest, SendsServerInfoAdvertiseThenTheLatestAndNewMessages) {
   server_->Publish(kPose, 42, R"({"latest":1})");
   Client c(port_);
-  ASSERT_TRUE(RunUntil([&] { c.io.poll(); return c.done; }));
+  ASSERT_TRUE(RunUntil([&] {
+    c.io.poll();
+    return c.done;
+  }));
   ASSERT_FALSE(c.ec) << c.ec.message();
   EXPECT_EQ(c.res[beast::http::field::sec_websocket_protocol], "foxglove.websocket.v1");
   c.Read();
-  ASSERT_TRUE(RunUntil([&] { c.io.poll(); return c.done; }));
+  ASSERT_TRUE(RunUntil([&] {
+    c.io.poll();
+    return c.done;
+  }));
   EXPECT_EQ(json::parse(c.text())["op"], "serverInfo");
   c.Read();
-  ASSERT_TRUE(RunUntil([&] { c.io.poll(); return c.done; }));
+  ASSERT_TRUE(RunUntil([&] {
+    c.io.poll();
+    return c.done;
+  }));
   EXPECT_EQ(json::parse(c.text())["op"], "advertise");
   c.ws.text(true);
-  c.ws.write(boost::asio::buffer(std::string(R"({"op":"subscribe","subscriptions":[{"id":9,"channelId":2}]})")));
+  c.ws.write(boost::asio::buffer(
+      std::string(R"({"op":"subscribe","subscriptions":[{"id":9,"channelId":2}]})")));
   c.Read();
-  ASSERT_TRUE(RunUntil([&] { c.io.poll(); return c.done; }));
+  ASSERT_TRUE(RunUntil([&] {
+    c.io.poll();
+    return c.done;
+  }));
   ASSERT_FALSE(c.ec);
   EXPECT_FALSE(c.ws.got_text());
   EXPECT_EQ(c.text(), MessageDataFrame(9, 42, R"({"latest":1})"));
@@ -403,13 +427,20 @@ TEST_F(FoxgloveServerTest, SendsServerInfoAdvertiseThenTheLatestAndNewMessages) 
   server_->Publish(kPose, 43, R"({"next":2})");
   server_->Publish(kTf, 43, R"({"other":3})");  // not subscribed: not sent
   c.Read();
-  ASSERT_TRUE(RunUntil([&] { c.io.poll(); return c.done; }));
+  ASSERT_TRUE(RunUntil([&] {
+    c.io.poll();
+    return c.done;
+  }));
   EXPECT_EQ(c.text(), MessageDataFrame(9, 43, R"({"next":2})"));
 }
 
 TEST_F(FoxgloveServerTest, ClosesAClientThatSendsBadInputAndKeepsTheOthers) {
   Client bad(port_), good(port_);
-  ASSERT_TRUE(RunUntil([&] { bad.io.poll(); good.io.poll(); return bad.done && good.done; }));
+  ASSERT_TRUE(RunUntil([&] {
+    bad.io.poll();
+    good.io.poll();
+    return bad.done && good.done;
+  }));
   ASSERT_TRUE(RunUntil([&] { return server_->clients() == 2; }));
   bad.ws.text(true);
   bad.ws.write(boost::asio::buffer(std::string("{this is not json")));
@@ -419,7 +450,10 @@ TEST_F(FoxgloveServerTest, ClosesAClientThatSendsBadInputAndKeepsTheOthers) {
   beast::error_code ec;
   for (int i = 0; i < 3 && !ec; ++i) {
     bad.Read();
-    RunUntil([&] { bad.io.poll(); return bad.done; });
+    RunUntil([&] {
+      bad.io.poll();
+      return bad.done;
+    });
     ec = bad.ec;
   }
   EXPECT_EQ(ec, websocket::error::closed);
@@ -428,16 +462,23 @@ TEST_F(FoxgloveServerTest, ClosesAClientThatSendsBadInputAndKeepsTheOthers) {
 
 TEST_F(FoxgloveServerTest, RefusesAClientWithoutTheSubprotocol) {
   Client c(port_, "something.else");
-  ASSERT_TRUE(RunUntil([&] { c.io.poll(); return c.done; }));
+  ASSERT_TRUE(RunUntil([&] {
+    c.io.poll();
+    return c.done;
+  }));
   EXPECT_TRUE(c.ec);
   EXPECT_EQ(server_->stats().rejected, 1u);
 }
 
 TEST_F(FoxgloveServerTest, ASlowClientLosesMessagesAndMemoryStaysBounded) {
   Client slow(port_);
-  ASSERT_TRUE(RunUntil([&] { slow.io.poll(); return slow.done; }));
+  ASSERT_TRUE(RunUntil([&] {
+    slow.io.poll();
+    return slow.done;
+  }));
   slow.ws.text(true);
-  slow.ws.write(boost::asio::buffer(std::string(R"({"op":"subscribe","subscriptions":[{"id":1,"channelId":7}]})")));
+  slow.ws.write(boost::asio::buffer(
+      std::string(R"({"op":"subscribe","subscriptions":[{"id":1,"channelId":7}]})")));
   ASSERT_TRUE(RunUntil([&] { return server_->HasSubscribers(kIr); }));
   // The client reads nothing: 2000 messages of 64 KiB would be 128 MiB queued.
   const std::string big(64 * 1024, 'x');
