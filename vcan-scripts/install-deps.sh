@@ -11,6 +11,10 @@ pkgs=(cmake make g++ pkg-config
       libboost-dev libeigen3-dev libgpiod-dev libsystemd-dev nlohmann-json3-dev
       libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev can-utils
       iproute2 systemd python3 python3-pil python3-numpy)
+# Node.js and npm for the Foxglove test (tests/foxglove, @foxglove/ws-protocol):
+# Debian's, unless the machine has a node and npm already (from another source).
+command -v node >/dev/null || pkgs+=(nodejs)
+command -v npm >/dev/null || pkgs+=(npm)
 for arg in "$@"; do
   case "$arg" in
     --vm)   pkgs+=(qemu-system-x86 busybox-static cpio kmod gpiod) ;;

@@ -11,6 +11,7 @@ fail() { echo "package-test: $*" >&2; exit 1; }
 export DEBIAN_FRONTEND=noninteractive
 apt-get install -y -qq "$deb" >/dev/null || fail "apt install failed"
 for f in /usr/bin/irslamd /usr/bin/irslamctl /usr/bin/irslam-candump /usr/bin/irslam-sim /usr/bin/irslam-replay \
+         /usr/bin/irslam-foxglove /usr/share/man/man1/irslam-foxglove.1.gz \
          /usr/lib/systemd/system/irslamd.service /usr/lib/sysusers.d/irslam.conf \
          /etc/irslam/irslamd.conf /usr/share/irslam/irslam.dbc \
          /usr/share/man/man8/irslamd.8.gz /usr/share/man/man1/irslamctl.1.gz \
@@ -25,6 +26,7 @@ dpkg-query -W -f='${Conffiles}\n' irslam | grep -q /etc/irslam/irslamd.conf || f
 getent passwd irslam >/dev/null || fail "the irslam user was not created"
 /usr/bin/irslamd --config /etc/irslam/irslamd.conf --print-config >/dev/null || fail "irslamd --print-config failed"
 man -w irslamd >/dev/null 2>&1 || fail "man irslamd not found"
+/usr/bin/irslam-foxglove --help >/dev/null || fail "irslam-foxglove --help failed"
 if command -v systemd-analyze >/dev/null; then
   out=$(systemd-analyze verify /usr/lib/systemd/system/irslamd.service 2>&1 || true)
   [ -z "$out" ] || fail "systemd-analyze verify: $out"

@@ -18,5 +18,11 @@ for arg in "$@"; do
   esac
 done
 irslam_build "${cmake_args[@]}"
+# The Foxglove test's npm packages (@foxglove/ws-protocol, ws; pinned in
+# tests/foxglove/package-lock.json). Without them ctest reports foxglove_node skipped.
+if command -v npm >/dev/null && [ ! -f "$IRSLAM_ROOT/tests/foxglove/node_modules/@foxglove/ws-protocol/package.json" ]; then
+  (cd "$IRSLAM_ROOT/tests/foxglove" && npm ci --no-audit --no-fund --loglevel=error) ||
+    echo "test.sh: npm ci in tests/foxglove failed: the Foxglove node test will be skipped" >&2
+fi
 cd "$IRSLAM_BUILD"
 ctest --output-on-failure -j2 --timeout 600
