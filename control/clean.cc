@@ -128,6 +128,10 @@ void Clean::NextCell(bool unreachable) {
   phase_ = cell_ < plan_.routes.size() ? Phase::kPlanGoal : Phase::kDone;
 }
 
+namespace {
+constexpr double kIntoCellMargin = 0.05;
+}  // namespace
+
 Eigen::Vector2d Clean::IntoCell(const Eigen::Vector2d& p) const {
   if (cell_ >= plan_.order.size()) return p;
   const CoverageCell& c = plan_.cells[static_cast<size_t>(plan_.order[cell_])];
@@ -135,7 +139,11 @@ Eigen::Vector2d Clean::IntoCell(const Eigen::Vector2d& p) const {
   Eigen::Vector2d best = q;
   double best_d = 1e18;
   for (const Slab& s : c.slabs) {
-    const Eigen::Vector2d in(std::clamp(q.x(), s.x0, s.x1), std::clamp(q.y(), s.ylo, s.yhi));
+    // A margin inside the slab: the planner judges a goal by its grid cell's
+    // clearance (half a cell off), so a point right on the boundary can fail.
+    const double mx = std::min(kIntoCellMargin, 0.5 * (s.x1 - s.x0));
+    const double my = std::min(kIntoCellMargin, 0.5 * (s.yhi - s.ylo));
+    const Eigen::Vector2d in(std::clamp(q.x(), s.x0 + mx, s.x1 - mx), std::clamp(q.y(), s.ylo + my, s.yhi - my));
     if ((in - q).norm() < best_d) {
       best_d = (in - q).norm();
       best = in;
@@ -230,14 +238,15 @@ Clean::Result Clean::Step(double t, const slam::Slam& slam, const RangeScan& raw
           point_ + 1 < route.size() ? route[point_ + 1] : (point_ > 0 ? route[point_ - 1] : goal);
       const Eigen::Vector2d dir =
           (toward - goal).norm() > 1e-6 ? Eigen::Vector2d((toward - goal).normalized()) : Eigen::Vector2d(0, 0);
-      // A point of the edge pass lies closer still: then try it moved into the
-      // cell's free space too.
+      // The last try: the point moved into the cell's free space, a margin
+      // inside (a point of the pushed-out edge pass lies outside it, and a
+      // contact remembered near a lane end can block the point itself).
       std::vector<Eigen::Vector2d> tries;
       for (double shift : {0.0, 0.06, 0.12}) {
         if (shift > 0 && shift > (toward - goal).norm() - 0.02) break;
         tries.push_back(goal + shift * dir);
       }
-      if (plan_.edge_out_m > 0) {
+      {
         const Eigen::Vector2d in = IntoCell(goal);
         if ((in - goal).norm() > 1e-6) tries.push_back(in);
       }
