@@ -133,6 +133,30 @@ void Clean::NextCell(bool unreachable) {
   phase_ = cell_ < plan_.routes.size() ? Phase::kPlanGoal : Phase::kDone;
 }
 
+namespace {
+constexpr double kIntoCellMargin = 0.05;
+}  // namespace
+
+Eigen::Vector2d Clean::IntoCell(const Eigen::Vector2d& p) const {
+  if (cell_ >= plan_.order.size()) return p;
+  const CoverageCell& c = plan_.cells[static_cast<size_t>(plan_.order[cell_])];
+  const Eigen::Vector2d q = plan_.swapped ? Eigen::Vector2d(p.y(), p.x()) : p;
+  Eigen::Vector2d best = q;
+  double best_d = 1e18;
+  for (const Slab& s : c.slabs) {
+    // A margin inside the slab: the planner judges a goal by its grid cell's
+    // clearance (half a cell off), so a point right on the boundary can fail.
+    const double mx = std::min(kIntoCellMargin, 0.5 * (s.x1 - s.x0));
+    const double my = std::min(kIntoCellMargin, 0.5 * (s.yhi - s.ylo));
+    const Eigen::Vector2d in(std::clamp(q.x(), s.x0 + mx, s.x1 - mx), std::clamp(q.y(), s.ylo + my, s.yhi - my));
+    if ((in - q).norm() < best_d) {
+      best_d = (in - q).norm();
+      best = in;
+    }
+  }
+  return plan_.swapped ? Eigen::Vector2d(best.y(), best.x()) : best;
+}
+
 void Clean::SkipPoint() {
   // The segment to the point given up is not swept.
   const auto& r = plan_.routes[cell_];
@@ -176,7 +200,7 @@ Twist Clean::Follow(const Pose2& me, const RangeScan& scan, bool* blocked, bool*
     const double hx = m.x + *scan.range_m[i] * std::cos(m.theta);
     const double hy = m.y + *scan.range_m[i] * std::sin(m.theta);
     if (hx > 0 && std::abs(hy) < radius_m_ && hx < radius_m_ + o.front_stop_m &&
-        hx < rest + radius_m_ + o.clearance_m - 0.05)
+        hx < rest + radius_m_ + std::min(o.clearance_m, o.edge_clearance_m) - 0.05)
       *blocked = true;
   }
   const double v = std::min(o.sweep_speed_mps * std::cos(err), o.approach_gain * rest + 0.03);
@@ -206,6 +230,7 @@ Clean::Result Clean::Step(double t, const slam::Slam& slam, const RangeScan& raw
       const Eigen::Vector2d goal = plan_.routes[cell_][point_];
       if ((goal - Eigen::Vector2d(me.x, me.y)).norm() < 2 * options_.waypoint_tolerance_m) {
         ++point_;
+        failures_ = 0;
         phase_ = Phase::kSweep;
         if (point_ >= plan_.routes[cell_].size()) NextCell(false);
         return {};
@@ -218,9 +243,22 @@ Clean::Result Clean::Step(double t, const slam::Slam& slam, const RangeScan& raw
           point_ + 1 < route.size() ? route[point_ + 1] : (point_ > 0 ? route[point_ - 1] : goal);
       const Eigen::Vector2d dir =
           (toward - goal).norm() > 1e-6 ? Eigen::Vector2d((toward - goal).normalized()) : Eigen::Vector2d(0, 0);
+      // The last try: the point moved into the cell's free space, a margin
+      // inside (a point of the pushed-out edge pass lies outside it, and a
+      // contact remembered near a lane end can block the point itself).
+      std::vector<Eigen::Vector2d> tries;
       for (double shift : {0.0, 0.06, 0.12}) {
         if (shift > 0 && shift > (toward - goal).norm() - 0.02) break;
-        if (go_to_.TryGoal(RotateVector(goal + shift * dir, -rot), 0, false, slam, bumps)) {
+        tries.push_back(goal + shift * dir);
+      }
+      {
+        const Eigen::Vector2d in = IntoCell(goal);
+        if ((in - goal).norm() > 1e-6) tries.push_back(in);
+      }
+      for (size_t k = 0; k < tries.size() && k < 3; ++k) {
+        // At most three plans: the last is the one moved into the cell, if any.
+        const Eigen::Vector2d& p = k == 2 ? tries.back() : tries[k];
+        if (go_to_.TryGoal(RotateVector(p, -rot), 0, false, slam, bumps)) {
           go_to_.Begin(t);
           phase_ = Phase::kTransit;
           return {};
@@ -237,6 +275,7 @@ Clean::Result Clean::Step(double t, const slam::Slam& slam, const RangeScan& raw
         return {};
       }
       ++point_;
+      failures_ = 0;
       phase_ = Phase::kSweep;
       if (point_ >= plan_.routes[cell_].size()) NextCell(false);
       return {};
@@ -254,6 +293,7 @@ Clean::Result Clean::Step(double t, const slam::Slam& slam, const RangeScan& raw
   bool blocked = false, passed = false;
   const Twist tw = Follow(me, scan, &blocked, &passed);
   if (passed) {
+    failures_ = 0;
     if (++point_ >= plan_.routes[cell_].size()) NextCell(false);
     return {Status::kCleaning, tw};
   }

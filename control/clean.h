@@ -96,6 +96,10 @@ class Clean {
   enum class Phase { kPlanGoal, kTransit, kSweep, kDone };
   // The current cell is finished (swept, or its rest given up).
   void NextCell(bool unreachable);
+  // The nearest point of the current cell's free space, 5 cm inside its
+  // boundary where it is that wide (the route points of a pushed-out edge pass
+  // lie outside it).
+  Eigen::Vector2d IntoCell(const Eigen::Vector2d& p) const;
   // Gives the current route point up.
   void SkipPoint();
   double RemainingRoute() const;

@@ -16,6 +16,8 @@ options::Table<CleaningOptions> CleaningKeys() {
       {"overlap_m", &O::overlap_m, 0, 1, "m", "neighbouring lanes overlap by this"},
       {"clearance_m", &O::clearance_m, 0, 1, "m",
        "lanes keep the robot radius plus this from walls and furniture"},
+      {"edge_clearance_m", &O::edge_clearance_m, 0, 1, "m",
+       "the edge pass keeps the robot radius plus this from walls and furniture (at most clearance_m)"},
       {"bump_block_m", &O::bump_block_m, 0, 1, "m",
        "a remembered contact blocks the robot radius plus this round it"},
       {"max_bump_obstacles", &O::max_bump_obstacles, 0, 1000, "",
@@ -45,7 +47,7 @@ options::Table<CleaningOptions> CleaningKeys() {
       {"stuck_s", &O::stuck_s, 1, 3600, "s",
        "no 0.1 m of progress for this long while cleaning: the route point is given up"},
       {"max_goal_failures", &O::max_goal_failures, 1, 1000, "",
-       "route points given up in one cell before the rest of it is reported unreachable"},
+       "route points given up in a row in one cell before the rest of it is reported unreachable"},
       {"max_time_s", &O::max_time_s, 1, 1e6, "s", "cleaning plus going home, robot time"},
       {"home_tolerance_m", &O::home_tolerance_m, 0.01, 1, "m", "home is reached within this"},
       {"home_attempts", &O::home_attempts, 1, 100, "", "plans home before giving up"},
@@ -112,6 +114,38 @@ std::vector<Eigen::Vector2d> Simplify(const std::vector<Eigen::Vector2d>& in) {
   return out;
 }
 
+// The lower (top = false) or upper boundary from x0 to x1 (left to right), pushed
+// out by d: each slab's y by d away from the cell, each step's x by d towards the
+// box that makes it. Steps pushed past each other (a slab narrower than 2 d)
+// meet halfway.
+void PushedBoundary(const CoverageCell& c, double d, bool top, std::vector<Eigen::Vector2d>* out) {
+  const size_t n = c.slabs.size();
+  const auto y_of = [&](const Slab& s) { return top ? s.yhi + d : s.ylo - d; };
+  std::vector<double> xs;
+  std::vector<std::pair<double, double>> ys;  // before, after each step
+  for (size_t i = 0; i + 1 < n; ++i) {
+    const double y0 = top ? c.slabs[i].yhi : c.slabs[i].ylo;
+    const double y1 = top ? c.slabs[i + 1].yhi : c.slabs[i + 1].ylo;
+    if (std::abs(y0 - y1) < 1e-9) continue;
+    // The box is on the right where the boundary steps into the cell.
+    const bool box_right = top ? y1 < y0 : y1 > y0;
+    xs.push_back(c.slabs[i].x1 + (box_right ? d : -d));
+    ys.emplace_back(y_of(c.slabs[i]), y_of(c.slabs[i + 1]));
+  }
+  const double xa = c.slabs.front().x0 - d, xb = c.slabs.back().x1 + d;
+  for (size_t k = 0; k < xs.size(); ++k) {
+    const double lo = k == 0 ? xa : xs[k - 1];
+    if (xs[k] < lo) xs[k] = k == 0 ? xa : (xs[k - 1] = 0.5 * (xs[k - 1] + xs[k]));
+  }
+  if (!xs.empty() && xs.back() > xb) xs.back() = xb;
+  out->emplace_back(xa, y_of(c.slabs.front()));
+  for (size_t k = 0; k < xs.size(); ++k) {
+    out->emplace_back(xs[k], ys[k].first);
+    out->emplace_back(xs[k], ys[k].second);
+  }
+  out->emplace_back(xb, y_of(c.slabs.back()));
+}
+
 CoverageCell Mirrored(const CoverageCell& c, bool mx, bool my) {
   CoverageCell m = c;
   m.slabs.clear();
@@ -136,20 +170,37 @@ double Gap(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return (a - b).
 }  // namespace
 
 std::vector<Eigen::Vector2d> SweepRoute(const CoverageCell& cell, double spacing, bool mirror_x,
-                                        bool mirror_y, bool edge_pass) {
+                                        bool mirror_y, bool edge_pass, double edge_out) {
   const CoverageCell c = Mirrored(cell, mirror_x, mirror_y);
   std::vector<Eigen::Vector2d> r;
   if (c.slabs.empty()) return r;
+  const double d = edge_pass ? std::max(0.0, edge_out) : 0.0;
   const double x0 = c.slabs.front().x0, x1 = c.slabs.back().x1, w = x1 - x0;
-  const int n = w < 1e-3 ? 1 : static_cast<int>(std::ceil(w / spacing - 1e-9)) + 1;
+  // Lanes over the width the edge pass spans (its sides pushed out by d).
+  const int n = w < 1e-3 ? 1 : static_cast<int>(std::ceil((w + 2 * d) / spacing - 1e-9)) + 1;
   if (n == 1) {
     const double x = 0.5 * (x0 + x1);
     const auto [lo, hi] = IntervalAt(c, x);
-    r = {{x, lo}, {x, hi}};
+    r = {{x, lo}, {x, lo - d}, {x, hi + d}};
   } else {
-    const auto lane_x = [&](int k) { return x0 + w * k / (n - 1); };
+    const auto lane_x = [&](int k) {
+      if (d <= 0) return x0 + w * k / (n - 1);
+      return std::clamp(x0 - d + (w + 2 * d) * k / (n - 1), x0, x1);
+    };
     int first = 0, last = n - 1;
-    if (edge_pass) {
+    if (edge_pass && d > 0) {
+      // Edge pass pushed out: from the cell's corner out to the pushed one,
+      // round along the lower boundary, the right side, the upper boundary,
+      // down the left side and back into the corner.
+      r.emplace_back(x0, IntervalAt(c, x0).first);
+      std::vector<Eigen::Vector2d> up;
+      PushedBoundary(c, d, false, &r);
+      PushedBoundary(c, d, true, &up);
+      r.insert(r.end(), up.rbegin(), up.rend());
+      r.emplace_back(x0 - d, c.slabs.front().ylo - d);
+      first = 1;
+      last = n - 2;
+    } else if (edge_pass) {
       // Edge pass: along the lower boundary, up the last lane, back along the
       // upper boundary, down the first lane; then the lanes in between.
       Boundary(c, x0, x1, false, &r);
@@ -198,6 +249,7 @@ CoveragePlan PlanOriented(Box room, std::vector<Box> objects, std::vector<Eigen:
   plan.swapped = swap;
   const double g = radius + o.clearance_m;
   plan.inflation_m = g;
+  plan.edge_out_m = o.edge_pass ? std::max(0.0, o.clearance_m - o.edge_clearance_m) : 0.0;
   plan.lane_spacing_m = std::max(0.02, o.cleaning_width_m - o.overlap_m);
   plan.free = {room.xmin + g, room.ymin + g, room.xmax - g, room.ymax - g};
   std::vector<Box> obstacles;
@@ -258,7 +310,7 @@ CoveragePlan PlanOriented(Box room, std::vector<Box> objects, std::vector<Eigen:
     std::vector<Eigen::Vector2d> best;
     for (int corner = 0; corner < 4; ++corner) {
       auto r = SweepRoute(plan.cells[static_cast<size_t>(ci)], plan.lane_spacing_m, corner & 1,
-                          corner & 2, o.edge_pass);
+                          corner & 2, o.edge_pass, plan.edge_out_m);
       if (best.empty() || Gap(at, r.front()) < Gap(at, best.front())) best = std::move(r);
     }
     plan.transit_length_m += Gap(at, best.front());

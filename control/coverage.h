@@ -27,8 +27,9 @@ namespace irslam::control {
 // Config section [cleaning]: planning and driving the lanes.
 struct CleaningOptions {
   double cleaning_width_m = 0.34;  // floor width cleaned in one pass (the body's diameter)
-  double overlap_m = 0.06;         // neighbouring lanes overlap by this
+  double overlap_m = 0.04;         // neighbouring lanes overlap by this
   double clearance_m = 0.05;       // lanes keep the robot radius plus this from walls and furniture
+  double edge_clearance_m = 0.05;  // the edge pass keeps the robot radius plus this (< clearance_m: closer than the lanes)
   double bump_block_m = 0.05;      // a remembered contact blocks the robot radius plus this round it
   int max_bump_obstacles = 40;     // at most this many contacts (the latest) go into the plan
   double min_interval_m = 0.005;   // free intervals and overlaps narrower than this do not count
@@ -47,7 +48,7 @@ struct CleaningOptions {
                                    // (and short of where the lane ends): plan round it
   double coverage_cell_m = 0.05;   // grid of the covered-floor estimate
   double stuck_s = 20;             // no 0.1 m of progress for this long: the route point is given up
-  int max_goal_failures = 4;       // route points given up in one cell before the cell is
+  int max_goal_failures = 4;       // route points given up in a row: the rest of the cell is given up
   double max_time_s = 3600;        // cleaning plus going home, robot time
   double home_tolerance_m = 0.05;  // home is reached within this
   int home_attempts = 3;           // plans home before giving up
@@ -71,6 +72,7 @@ struct CoverageCell {
 struct CoveragePlan {
   bool swapped = false;        // cells and slabs have x and y swapped (lanes along the map's x)
   double inflation_m = 0;      // robot radius + clearance
+  double edge_out_m = 0;       // the edge pass runs this much closer to walls and furniture
   double lane_spacing_m = 0;
   Box free;                    // the centre's free space bounds (room shrunk)
   std::vector<CoverageCell> cells;
@@ -90,9 +92,11 @@ std::vector<CoverageCell> Decompose(const Box& free, const std::vector<Box>& obs
 
 // The sweep of one cell: edge pass round it (if asked for), then the lanes in
 // between, starting in the corner given (mirror_x: from the right; mirror_y:
-// from the top).
+// from the top). edge_out_m: the edge pass runs this much outside the cell's
+// boundary (closer to the walls and furniture that make it; the route starts
+// and its lanes run inside the cell).
 std::vector<Eigen::Vector2d> SweepRoute(const CoverageCell& cell, double spacing_m, bool mirror_x,
-                                        bool mirror_y, bool edge_pass = true);
+                                        bool mirror_y, bool edge_pass = true, double edge_out_m = 0);
 
 // The whole plan from the room model (map frame), contacts (map frame) and where
 // the robot stands (map frame).

@@ -14,6 +14,7 @@ constexpr double kRadius = 0.17;
 CleaningOptions Options() {
   CleaningOptions o;
   o.clearance_m = 0.03;  // inflation 0.2 m
+  o.edge_clearance_m = 0.03;  // the edge pass on the cell boundary (unless a test says otherwise)
   o.cleaning_width_m = 0.34;
   o.overlap_m = 0.04;  // lanes 0.3 m apart
   o.both_directions = false;  // lanes along y, the sweep along x (unless a test says otherwise)
@@ -127,6 +128,64 @@ TEST(CoverageTest, LanesNeverCrossAnObjectAndTheTourVisitsEveryCell) {
   // The sweep is not much longer than the area over the lane spacing.
   const double area = TotalArea(p.cells);
   EXPECT_LT(p.route_length_m, 1.6 * area / p.lane_spacing_m + 15);
+}
+
+TEST(CoverageTest, TheEdgePassRunsCloserToTheWallsThanTheLanes) {
+  CleaningOptions o = Options();
+  o.clearance_m = 0.05;       // lanes 0.22 m from the walls
+  o.edge_clearance_m = 0.01;  // the edge pass 0.18 m
+  const CoveragePlan p = PlanCoverage({0, 0, 4, 3}, {}, {}, {0.3, 0.3}, kRadius, o);
+  EXPECT_NEAR(p.edge_out_m, 0.04, 1e-12);
+  ASSERT_EQ(p.routes.size(), 1u);
+  const auto& r = p.routes[0];
+  // It starts in the cell's corner (where a planner can take it), goes out to
+  // the edge pass's corner and round the room 0.18 m from every wall.
+  ASSERT_GE(r.size(), 7u);
+  EXPECT_NEAR((r[0] - Eigen::Vector2d(0.22, 0.22)).norm(), 0, 1e-9);
+  const Eigen::Vector2d loop[] = {{0.18, 0.18}, {3.82, 0.18}, {3.82, 2.82}, {0.18, 2.82}, {0.18, 0.18}};
+  for (int k = 0; k < 5; ++k) EXPECT_NEAR((r[1 + k] - loop[k]).norm(), 0, 1e-9) << "point " << 1 + k;
+  EXPECT_NEAR((r[6] - Eigen::Vector2d(0.22, 0.22)).norm(), 0, 1e-9);
+  // The lanes after it keep the lane clearance.
+  for (size_t k = 6; k < r.size(); ++k) {
+    EXPECT_GE(r[k].x(), 0.22 - 1e-9);
+    EXPECT_LE(r[k].x(), 3.78 + 1e-9);
+    EXPECT_GE(r[k].y(), 0.22 - 1e-9);
+    EXPECT_LE(r[k].y(), 2.78 + 1e-9);
+  }
+  // 3.64 m between the edge pass's sides at 0.3 m: 14 lanes, 12 of them inside.
+  int lanes = 0;
+  for (size_t k = 7; k < r.size(); ++k) {
+    const Eigen::Vector2d d = r[k] - r[k - 1];
+    if (std::abs(d.x()) < 1e-9 && std::abs(std::abs(d.y()) - 2.56) < 1e-9) ++lanes;
+  }
+  EXPECT_EQ(lanes, 12);
+}
+
+TEST(CoverageTest, TheEdgePassRoundFurnitureKeepsTheEdgeClearanceAndNoLess) {
+  const std::vector<Box> objects = {{0, 2.0, 0.6, 3.2}, {1.4, 1.2, 2.2, 1.8}, {2.3, 3.6, 3.0, 4.4}};
+  CleaningOptions o = Options();
+  o.clearance_m = 0.05;
+  o.edge_clearance_m = 0.015;
+  for (bool both : {false, true}) {
+    o.both_directions = both;
+    const CoveragePlan p = PlanCoverage({0, 0, 4, 5.5}, objects, {}, {2.0, 0.8}, kRadius, o);
+    ASSERT_EQ(p.routes.size(), p.cells.size());
+    std::vector<double> least(objects.size(), 1e9);
+    for (const auto& r : p.routes) {
+      for (size_t i = 0; i < objects.size(); ++i) least[i] = std::min(least[i], RouteClearance(r, objects[i]));
+      for (const auto& q : r) {
+        EXPECT_GE(q.x(), 0.185 - 1e-9);
+        EXPECT_LE(q.x(), 3.815 + 1e-9);
+        EXPECT_GE(q.y(), 0.185 - 1e-9);
+        EXPECT_LE(q.y(), 5.315 + 1e-9);
+      }
+    }
+    // Every box is passed at the edge clearance: closer than the lanes, never closer than that.
+    for (size_t i = 0; i < objects.size(); ++i) {
+      EXPECT_GE(least[i], kRadius + 0.015 - 1e-6) << "box " << i;
+      EXPECT_LE(least[i], kRadius + 0.015 + 0.005) << "box " << i;
+    }
+  }
 }
 
 TEST(CoverageTest, AContactBlocksTheFloorRoundIt) {
