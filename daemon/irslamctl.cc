@@ -127,7 +127,7 @@ int main(int argc, char** argv) {
   start->add_option("--mode", mode, "explore (map only) or clean (map, clean, return to the start); "
                                     "default: the daemon's mission.mode")
       ->check(CLI::IsMember({"explore", "clean"}));
-  start->add_flag("--fresh", fresh, "Forget the saved map (every start explores from nothing today)");
+  start->add_flag("--fresh", fresh, "Forget the saved map: explore from nothing instead of relocalising in it");
   auto* clean = app.add_subcommand("clean", "Start the mission in mode clean");
   auto* stop = app.add_subcommand("stop", "Stop the robot");
   std::string out_path, svg_path;

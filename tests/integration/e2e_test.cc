@@ -778,6 +778,58 @@ TEST(CommandLineTest, BadConfigAndWorldFilesGiveOneLineAndStatus2) {
   std::filesystem::remove_all(dir);
 }
 
+// Issue 14: irslam-sim run --map-in, --start and the kidnap fault's target are
+// checked before the run, each in one line with status 2; good ones run.
+TEST(CommandLineTest, SimRunMapInStartAndKidnapAreCheckedInOneLine) {
+  const std::string dir = testing::MakeTempDir();
+  const std::string world = std::string(IRSLAM_SOURCE_DIR) + "/tests/worlds/fig14.json";
+  const std::string golden = std::string(IRSLAM_SOURCE_DIR) + "/tests/unit/testdata/core_map.golden.json";
+  {
+    std::ofstream(dir + "/bad_map.json") << R"({"frame": "map", "state": "done", "lines": [{"id": 1}], "objects": []})";
+    std::ofstream(dir + "/not_json.json") << R"({"frame": )";
+  }
+  const auto run = [&](std::vector<std::string> extra) {
+    std::vector<std::string> argv = {kSim, "run", "--world", world, "--max-time", "2"};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    return argv;
+  };
+  const struct {
+    std::vector<std::string> argv;
+    std::string want;
+  } cases[] = {
+      {run({"--start", "1,2"}),
+       "irslam-sim: --start 1,2: expected X,Y,THETA (three numbers: metres, metres, radians), got '1,2'\n"},
+      {run({"--start", "9,1,0"}), "irslam-sim: --start 9,1,0: (9.00, 1.00) lies outside the room\n"},
+      {run({"--start", "0.3,2.5,0"}),
+       "irslam-sim: --start 0.3,2.5,0: (0.30, 2.50) lies inside object 1 [0.00, 2.00, 0.60, 3.20]\n"},
+      {run({"--start", "3.95,1,0"}), "irslam-sim: --start 3.95,1,0: (3.95, 1.00) is 0.05 m from a wall or object side"},
+      {run({"--faults", "kidnap:at=5:x=1.8:y=1.5"}),
+       "irslam-sim: --faults: kidnap at 5 s: (1.80, 1.50) lies inside object 2 [1.40, 1.20, 2.20, 1.80]\n"},
+      {run({"--map-in", dir + "/missing.json"}),
+       "irslam-sim: --map-in " + dir + "/missing.json: cannot read " + dir + "/missing.json"},
+      {run({"--map-in", dir + "/not_json.json"}), "irslam-sim: --map-in " + dir + "/not_json.json: not valid JSON"},
+      {run({"--map-in", dir + "/bad_map.json"}),
+       "irslam-sim: --map-in " + dir + "/bad_map.json: map.lines[0].rho: missing\n"},
+  };
+  for (const auto& c : cases) {
+    std::string out;
+    EXPECT_EQ(RunCommand(c.argv, &out), 2) << c.want;
+    EXPECT_EQ(out.rfind(c.want, 0), 0u) << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  }
+  // Good ones: the run goes ahead (2 s: not done, status 1, a map written).
+  std::string out;
+  EXPECT_EQ(RunCommand(run({"--map-in", golden, "--start", "3,0.8,1.5", "--faults", "kidnap:at=1:x=3:y=4.8",
+                            "--map-out", dir + "/out.json"}),
+                       &out),
+            1)
+      << out;
+  EXPECT_NE(out.find("--max-time reached"), std::string::npos) << out;
+  EXPECT_NE(out.find("\"kidnapped\":1"), std::string::npos) << out;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/out.json"));
+  std::filesystem::remove_all(dir);
+}
+
 // The map survives kill -9 at any moment: every restart finds the previous or the
 // new map intact, never a torn one (daemon/map_store.h: temp file, fsync, rename).
 TEST_F(E2eTest, KillNineAtRandomMomentsNeverLosesOrTearsTheMap) {
