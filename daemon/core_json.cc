@@ -253,13 +253,14 @@ class MapReader {
     *b = {v[0], v[1], v[2], v[3]};
     return true;
   }
-  bool Ids(const json& j, const std::string& at, const std::set<int>& known, std::vector<int>* out) {
+  // Line ids (of a wall or an object's sides). Ids that name no line of the map
+  // are kept: real maps have them (the model is made at the model step, and the
+  // SLAM merges lines after it), so readers must skip them.
+  bool Ids(const json& j, const std::string& at, std::vector<int>* out) {
     if (!Array(j, at, kMaxMapLines)) return false;
     out->resize(j.size());
     for (size_t i = 0; i < j.size(); ++i) {
-      const std::string here = at + "[" + std::to_string(i) + "]";
-      if (!Int(j[i], here, &(*out)[i], 0, INT32_MAX)) return false;
-      if (!known.count((*out)[i])) return Fail(here, "line " + std::to_string((*out)[i]) + " is not in the map");
+      if (!Int(j[i], at + "[" + std::to_string(i) + "]", &(*out)[i], 0, INT32_MAX)) return false;
     }
     return true;
   }
@@ -313,8 +314,7 @@ bool ReadLine(MapReader* r, const json& j, const std::string& at, slam::LineFeat
   return r->ok();
 }
 
-bool ReadObject(MapReader* r, const json& j, const std::string& at, const std::set<int>& lines,
-                control::ObjectModel* o) {
+bool ReadObject(MapReader* r, const json& j, const std::string& at, control::ObjectModel* o) {
   if (!r->Object(j, at)) return false;
   const json* v;
   if ((v = r->Member(j, at, "id", true))) r->Int(*v, at + ".id", &o->id, 0, INT32_MAX);
@@ -330,7 +330,7 @@ bool ReadObject(MapReader* r, const json& j, const std::string& at, const std::s
       }
     }
   }
-  if ((v = r->Member(j, at, "lines", true))) r->Ids(*v, at + ".lines", lines, &o->lines);
+  if ((v = r->Member(j, at, "lines", true))) r->Ids(*v, at + ".lines", &o->lines);
   if ((v = r->Member(j, at, "complete", false))) r->Bool(*v, at + ".complete", &o->complete);
   if ((v = r->Member(j, at, "box", false))) r->Box(*v, at + ".box", &o->box);
   if ((v = r->Member(j, at, "open_ends", false))) r->Int(*v, at + ".open_ends", &o->open_ends, 0, 1000000);
@@ -339,7 +339,7 @@ bool ReadObject(MapReader* r, const json& j, const std::string& at, const std::s
   return r->ok();
 }
 
-bool ReadRoom(MapReader* r, const json& j, const std::set<int>& lines, control::RoomModel* room) {
+bool ReadRoom(MapReader* r, const json& j, control::RoomModel* room) {
   if (!r->Object(j, "room")) return false;
   if (const json* w = r->Member(j, "room", "walls", false); w && r->Object(*w, "room.walls")) {
     static constexpr const char* kSides[4] = {"bottom", "right", "top", "left"};
@@ -349,7 +349,7 @@ bool ReadRoom(MapReader* r, const json& j, const std::set<int>& lines, control::
     }
     for (int i = 0; i < 4; ++i) {
       if (const json* side = r->Member(*w, "room.walls", kSides[i], false))
-        r->Ids(*side, std::string("room.walls.") + kSides[i], lines, &room->walls[i]);
+        r->Ids(*side, std::string("room.walls.") + kSides[i], &room->walls[i]);
     }
   }
   if (const json* b = r->Member(j, "room", "box", false); b && !b->is_null()) {
@@ -448,13 +448,13 @@ bool MapFromJson(const json& j, robot::MapSnapshot* map, std::string* why) {
         r.Fail(at + ".id", "line " + std::to_string(map->lines[i].id) + " is in the map twice");
     }
   }
-  if ((v = r.Member(j, "", "room", false))) ReadRoom(&r, *v, ids, &map->room);
+  if ((v = r.Member(j, "", "room", false))) ReadRoom(&r, *v, &map->room);
   if ((v = r.Member(j, "", "objects", true)) && r.Array(*v, "objects", kMaxMapObjects)) {
     map->objects.resize(v->size());
     std::set<int> object_ids;
     for (size_t i = 0; i < v->size() && r.ok(); ++i) {
       const std::string at = "objects[" + std::to_string(i) + "]";
-      if (ReadObject(&r, (*v)[i], at, ids, &map->objects[i]) && !object_ids.insert(map->objects[i].id).second)
+      if (ReadObject(&r, (*v)[i], at, &map->objects[i]) && !object_ids.insert(map->objects[i].id).second)
         r.Fail(at + ".id", "object " + std::to_string(map->objects[i].id) + " is in the map twice");
     }
   }

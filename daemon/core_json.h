@@ -19,10 +19,12 @@ nlohmann::json ToJson(const robot::MapSnapshot& map);
 // §7) back into the typed map, every field ToJson writes (a "length" is
 // derived from p0/p1 and not read; unknown keys such as "saved" are allowed).
 // So ToJson(*map) == j for any map ToJson wrote. False, and a one-line *why
-// naming the first bad field ("map.lines[3].cov: not a 2x2 matrix of finite
-// numbers"), for wrong types, non-finite numbers, duplicate line ids, object or
-// wall line ids that name no line, and absurd sizes (kMaxMap* below); *map is
-// then unspecified. Never throws.
+// naming the first bad field ("map.lines[3].cov[0][1]: not a number"), for
+// missing or wrong types, non-finite or absurd numbers, duplicate line or object
+// ids, unknown states or kinds, and absurd sizes (kMaxMap* below); *map is then
+// unspecified. Never throws. Wall and object side ids that name no line of the
+// map are kept, not refused: real maps have them (the model is made at the
+// model step; the SLAM merges lines after it), so users of the map skip them.
 bool MapFromJson(const nlohmann::json& j, robot::MapSnapshot* map, std::string* why);
 
 // Bounds MapFromJson enforces (a 2-hour mission's map is far below them).

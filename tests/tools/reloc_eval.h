@@ -13,6 +13,7 @@
 #define IRSLAM_TESTS_TOOLS_RELOC_EVAL_H_
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
 #include <vector>
