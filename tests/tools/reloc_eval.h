@@ -64,6 +64,7 @@ struct RelocRun {
   double end_t = 0;
   bool committed = false;    // status.relocalize.committed at some time
   double commit_t = 0;       // robot time of the first commit
+  double relocalize_s = 0;   // from status.relocalize.started_t to the commit
   int hypotheses = 0;        // at the first commit
   int attempts = 0;          // status.relocalize.attempts at the end
   PoseError at_commit;       // the first tick after the commit
