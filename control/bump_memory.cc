@@ -64,4 +64,11 @@ RangeScan BumpMemory::Apply(const RangeScan& scan, const Pose2& me) const {
   return out;
 }
 
+void BumpMemory::TransformSince(size_t from, const Pose2& t) {
+  for (size_t i = from; i < points_.size(); ++i) {
+    const auto [x, y] = ToParent(t, points_[i].x(), points_[i].y());
+    points_[i] = {x, y};
+  }
+}
+
 }  // namespace irslam::control

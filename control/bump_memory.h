@@ -42,6 +42,10 @@ class BumpMemory {
   // The scan with every remembered contact a beam would see added as a reading.
   RangeScan Apply(const RangeScan& scan, const Pose2& me) const;
   const std::vector<Eigen::Vector2d>& points() const { return points_; }
+  // The contacts recorded from index `from` on were in another frame: moves
+  // them by t (a point in that frame -> this one). Issue 14: the bumps of a
+  // relocalisation, recorded in the local SLAM's frame, join the saved map's.
+  void TransformSince(size_t from, const Pose2& t);
 
  private:
   BumpMemoryOptions options_;

@@ -29,6 +29,11 @@ GoToOptions CleaningGoTo(GoToOptions g, const CleaningOptions& c) {
   return g;
 }
 
+void Clean::Interrupted(double t) {
+  if (phase_ != Phase::kDone) phase_ = Phase::kPlanGoal;
+  progress_t_ = t;
+}
+
 void Clean::Reset() {
   progress_ = {};
   plan_ = {};

@@ -85,6 +85,9 @@ class Clean {
   CleaningProgress Progress(double t, double distance_m) const;
   const CoveragePlan& plan() const { return plan_; }
   void Reset();
+  // Driving was interrupted (issue 14: relocalising after the map disagreed):
+  // the next Step plans its way to the current route point again.
+  void Interrupted(double t);
   bool active() const { return progress_.state != CleanState::kNone; }
   // The go-to's path (internal frame) while it drives.
   const std::vector<Eigen::Vector2d>& path() const { return go_to_.path(); }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace irslam::control {
 
@@ -25,6 +26,8 @@ const char* ToString(MissionState s) {
       return "clean";
     case MissionState::kReturnHome:
       return "return_home";
+    case MissionState::kRelocalize:
+      return "relocalize";
   }
   return "?";
 }
@@ -70,7 +73,10 @@ Mission::Mission(MissionOptions options, WallFollowerOptions wall, ExploreOption
             return g;
           }(),
           slam.geometry, slam.mounts),
-      clean_mode_(options.mode == "clean") {}
+      clean_mode_(options.mode == "clean"),
+      model_options_(model),
+      reloc_(options.relocalize),
+      agreement_(options.relocalize) {}
 
 void Mission::Enter(MissionState s, double t, std::string reason) {
   state_ = s;
@@ -83,15 +89,21 @@ void Mission::Enter(MissionState s, double t, std::string reason) {
   }
 }
 
-bool Mission::Start(double t, std::string* why) {
-  if (state_ == MissionState::kFault) {
-    *why = "cannot start while in fault: " + reason_;
+namespace {
+bool CanStart(MissionState state, const std::string& reason, std::string* why) {
+  if (state == MissionState::kFault) {
+    *why = "cannot start while in fault: " + reason;
     return false;
   }
-  if (state_ != MissionState::kIdle && state_ != MissionState::kDone) {
-    *why = std::string("already running (") + ToString(state_) + ")";
+  if (state != MissionState::kIdle && state != MissionState::kDone) {
+    *why = std::string("already running (") + ToString(state) + ")";
     return false;
   }
+  return true;
+}
+}  // namespace
+
+void Mission::Reset(double t) {
   started_at_ = t;
   last_t_ = t;
   survey_.Reset();
@@ -99,8 +111,151 @@ bool Mission::Start(double t, std::string* why) {
   loop_times_.clear();
   home_set_ = false;
   clean_.Reset();
+  checking_ = false;
+  adoption_.reset();
+  slam_reset_ = false;
+  reloc_ran_ = false;
+  reloc_.End();
+}
+
+bool Mission::Start(double t, std::string* why) {
+  if (!CanStart(state_, reason_, why)) return false;
+  Reset(t);
   Enter(MissionState::kWallFollow, t, "");
   return true;
+}
+
+bool Mission::StartInMap(double t, SavedMission saved, std::string* why) {
+  if (!CanStart(state_, reason_, why)) return false;
+  Reset(t);
+  modeler_.Seed(saved.model, saved.map.trajectory);
+  survey_.Exhaust();  // the saved mission surveyed the room already
+  reloc_.Begin(t, std::move(saved.map));
+  reloc_ran_ = true;
+  reloc_progress_ = {};
+  reloc_progress_.started_t = t;
+  reloc_progress_.attempts = 1;
+  after_reloc_ = MissionState::kModel;
+  reloc_bumps_from_ = bumps_.points().size();
+  Enter(MissionState::kRelocalize, t, "relocalising in the saved map");
+  return true;
+}
+
+bool Mission::StartKnown(double t, const slam::Slam& slam, std::string* why) {
+  if (!CanStart(state_, reason_, why)) return false;
+  Reset(t);
+  agreement_.Reset(slam);
+  checking_ = true;
+  survey_.Exhaust();  // the room was surveyed when it was modelled
+  Enter(MissionState::kModel, t,
+        "continuing in the map (" + std::to_string(slam.num_lines()) + " lines)");
+  return true;
+}
+
+std::optional<Adoption> Mission::TakeAdoption() {
+  std::optional<Adoption> a = std::move(adoption_);
+  adoption_.reset();
+  return a;
+}
+
+bool Mission::TakeSlamReset() { return std::exchange(slam_reset_, false); }
+
+std::optional<RelocalizeProgress> Mission::relocalize() const {
+  if (!reloc_ran_) return std::nullopt;
+  RelocalizeProgress p = reloc_progress_;
+  if (reloc_.active()) {
+    p.committed = false;
+    p.hypotheses = reloc_.hypotheses();
+    p.best_score = reloc_.best_score();
+    p.evidence_m = reloc_.evidence_m();
+  }
+  return p;
+}
+
+WheelCommand Mission::StepRelocalize(double t, double dt, const slam::Slam& slam,
+                                     const RangeScan& raw_scan, bool bumped) {
+  // Follow walls (leaving a free object circled, as in wall following) while
+  // the local SLAM maps; the search runs on each closed window.
+  const Twist tw = follower_.Step(t, bumps_.Apply(raw_scan, slam.pose()), bumped);
+  if (loop_.Update(t, follower_.steady(), slam.pose(), slam.distance_m()) == LoopEvent::kFreeObject)
+    follower_.Leave(t);
+  if (const std::optional<slam::PoseHypothesis> d = reloc_.Step(t, slam)) {
+    reloc_progress_.committed = true;
+    reloc_progress_.committed_t = t;
+    reloc_progress_.hypotheses = reloc_.hypotheses();
+    reloc_progress_.best_score = d->score;
+    reloc_progress_.evidence_m = reloc_.evidence_m();
+    adoption_ = Adoption{d->local_to_map, reloc_.map().lines};
+    local_to_map_ = d->local_to_map;
+    return Halt();
+  }
+  if (reloc_.TimedOut(t)) {
+    // The saved map is given up: what the local SLAM made so far is a fresh
+    // exploration's start (its own frame), and it goes on as one.
+    reloc_.End();
+    reloc_progress_.committed = false;
+    modeler_ = Modeler(model_options_);
+    checking_ = false;
+    const int s = static_cast<int>(options_.relocalize.search.max_time_s);
+    state_ = MissionState::kWallFollow;  // (not Enter: the follower keeps its wall)
+    reason_ = "could not relocalise in the saved map in " + std::to_string(s) + " s: exploring afresh";
+    home_in_local_ = false;
+    loop_.Reset();
+    return ToWheels(tw, dt);
+  }
+  return ToWheels(tw, dt);
+}
+
+void Mission::Adopted(double t, const slam::Slam& slam) {
+  // The frame changed under the mission: what it kept in the local frame moves.
+  if (home_set_ && home_in_local_) home_ = Compose(local_to_map_, home_);
+  home_in_local_ = false;
+  bumps_.TransformSince(reloc_bumps_from_, local_to_map_);
+  reloc_.End();
+  agreement_.Reset(slam);
+  checking_ = true;
+  const std::string how = "relocalised in the saved map (" +
+                          std::to_string(reloc_progress_.hypotheses) + " hypotheses, score " +
+                          std::to_string(static_cast<int>(std::lround(100 * reloc_progress_.best_score))) +
+                          " %)";
+  if (after_reloc_ == MissionState::kClean) {
+    clean_.Interrupted(t);
+    Enter(MissionState::kClean, t, how + ": cleaning on");
+  } else if (after_reloc_ == MissionState::kReturnHome) {
+    home_planned_ = false;
+    home_retry_t_ = t;
+    Enter(MissionState::kReturnHome, t, how + ": returning home");
+  } else {
+    Enter(MissionState::kModel, t, how);
+  }
+}
+
+bool Mission::CheckAgreement(double t, const slam::Slam& slam) {
+  if (!checking_ || agreement_.Step(slam)) return true;
+  const int pct = static_cast<int>(std::lround(100 * agreement_.agreement()));
+  const std::string why = "the map disagrees (" + std::to_string(pct) + " % of recent lines matched)";
+  if (reloc_progress_.attempts >= options_.relocalize.max_attempts) {
+    checking_ = false;
+    if (state_ == MissionState::kClean || state_ == MissionState::kReturnHome)
+      clean_.SetState(CleanState::kStopped, t, slam.distance_m());
+    Enter(MissionState::kIdle, t, why + ": giving up");
+    return false;
+  }
+  // Relocalise again in the map as it was before it stopped agreeing, with a
+  // fresh local SLAM (the core restarts it after this period).
+  after_reloc_ = (state_ == MissionState::kClean || state_ == MissionState::kReturnHome)
+                     ? state_
+                     : MissionState::kModel;
+  checking_ = false;
+  slam_reset_ = true;
+  reloc_.Begin(t, agreement_.checkpoint());
+  reloc_ran_ = true;
+  reloc_progress_.committed = false;
+  reloc_progress_.started_t = t;
+  ++reloc_progress_.attempts;
+  reloc_bumps_from_ = bumps_.points().size();
+  Enter(MissionState::kRelocalize, t, why + ": relocalising");
+  return false;
 }
 
 void Mission::Stop(double t) {
@@ -171,6 +326,7 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
   if (!home_set_ && state_ != MissionState::kIdle) {
     home_ = slam.pose();
     home_set_ = true;
+    home_in_local_ = state_ == MissionState::kRelocalize;
   }
   const double dt = std::clamp(t - last_t_, 0.0, options_.max_step_s);
   last_t_ = t;
@@ -183,7 +339,10 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
       break;
   }
   if (!Watchdogs(t, slam)) return Halt();
+  if (!CheckAgreement(t, slam)) return Halt();
   switch (state_) {
+    case MissionState::kRelocalize:
+      return StepRelocalize(t, dt, slam, scan, bumpers != 0);
     case MissionState::kWallFollow:
       return StepWallFollow(t, dt, slam, scan, bumpers != 0);
     case MissionState::kModel:

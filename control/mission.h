@@ -30,14 +30,22 @@
 //   return_home     no way home after home_attempts plans    done            "cleaned ...; home: why"
 // (clean and return_home: time limit [cleaning].max_time_s from entering clean.)
 //
-// Room for the next behaviours (not implemented): relocalize becomes a
-// behaviour class beside these, a MissionState (new values after kReturnHome:
-// the heartbeat carries the number), a Step* case in Mission::Step and its rows
-// above.
+// In a saved map (issue 14; relocalize.h):
+//   idle, done      start in a saved map (StartInMap)        relocalize      "relocalising in the saved map"
+//   idle, done      start, the live map modelled (StartKnown) model          "continuing in the map ..."
+//   relocalize      the search commits                       model           "relocalised in the saved map ..."
+//                   (the core then has the SLAM adopt the saved map: TakeAdoption, Adopted)
+//   relocalize      no commit within [relocalize].max_time_s wall_follow     "could not relocalise ...: exploring
+//                                                                              afresh" (the local map goes on)
+//   any running     the map disagrees (MapAgreement)         relocalize      "the map disagrees ...: relocalising"
+//                   (the core restarts the local SLAM: TakeSlamReset; after the commit the
+//                    mission resumes cleaning where it was, anything else via model)
+//   any running     the map disagreed max_attempts times     idle            "the map disagrees ...: giving up"
 #ifndef IRSLAM_CONTROL_MISSION_H_
 #define IRSLAM_CONTROL_MISSION_H_
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,6 +55,7 @@
 #include "control/go_to.h"
 #include "control/loop_detector.h"
 #include "control/path_planner.h"
+#include "control/relocalize.h"
 #include "control/room_model.h"
 #include "control/survey.h"
 #include "control/wall_follower.h"
@@ -67,7 +76,7 @@ enum class MissionState : uint8_t {
   kFault = 6,
   kClean = 7,
   kReturnHome = 8,
-  // Next: kRelocalize.
+  kRelocalize = 9,
 };
 const char* ToString(MissionState s);
 
@@ -83,8 +92,32 @@ struct MissionOptions {
   BumpMemoryOptions bump;           // [mission] too
   std::string mode = "explore";     // explore: map the room; clean: map, clean, go home
   CleaningOptions cleaning;         // [cleaning]
+  RelocalizeOptions relocalize;     // [relocalize]
 };
 options::Table<MissionOptions> MissionKeys();
+
+// What a mission continuing in a saved map starts from (map frame).
+struct SavedMission {
+  SavedLines map;
+  EnvironmentModel model;
+};
+
+// The SLAM is to adopt the saved map: Slam::AdoptMap(local_to_map, lines).
+struct Adoption {
+  Pose2 local_to_map;
+  std::vector<slam::LineFeature> lines;
+};
+
+// Relocalisation's progress (status.relocalize): searching, or committed.
+struct RelocalizeProgress {
+  bool committed = false;
+  double started_t = 0;
+  double committed_t = 0;
+  int hypotheses = 0;
+  double best_score = 0;
+  double evidence_m = 0;
+  int attempts = 0;
+};
 
 // The exploration behaviours' options (config section [exploration]).
 struct ExploreOptions {
@@ -99,6 +132,18 @@ class Mission {
           ModelOptions model, const slam::SlamOptions& slam);
 
   bool Start(double t, std::string* why);
+  // Starts in a saved map (the core has given it a fresh local SLAM): relocalise first.
+  bool StartInMap(double t, SavedMission saved, std::string* why);
+  // Starts again in the live map (modelled: the room is known): model, then the
+  // configured work, with the map's agreement checked as after a relocalisation.
+  bool StartKnown(double t, const slam::Slam& slam, std::string* why);
+  // Once per period after Step, for the core: the SLAM must adopt the saved map
+  // (then call Adopted with it), or restart from nothing for a new search.
+  std::optional<Adoption> TakeAdoption();
+  bool TakeSlamReset();
+  void Adopted(double t, const slam::Slam& slam);
+  // Relocalisation since the last start (none when the mission did not start in a map).
+  std::optional<RelocalizeProgress> relocalize() const;
   // The mode of the next start (the configured one until set): cleaning or not.
   void SetCleanMode(bool clean) { clean_mode_ = clean; }
   bool clean_mode() const { return clean_mode_; }
@@ -164,6 +209,13 @@ class Mission {
                          uint8_t bumpers);
   WheelCommand StepReturnHome(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
                               uint8_t bumpers);
+  WheelCommand StepRelocalize(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
+                              bool bumped);
+  // After a commit or a known start: the map's agreement is checked every
+  // period; false when the mission turned to relocalising (or gave up).
+  bool CheckAgreement(double t, const slam::Slam& slam);
+  // The common reset of every start.
+  void Reset(double t);
 
   MissionOptions options_;
   RobotGeometry geometry_;
@@ -198,6 +250,19 @@ class Mission {
   int home_attempts_ = 0;
   double home_retry_t_ = 0;  // the next plan home not before this
   double clean_started_ = 0;
+  // Working in a saved map (issue 14).
+  ModelOptions model_options_;
+  Relocalize reloc_;
+  MapAgreement agreement_;
+  bool checking_ = false;  // the map's agreement is checked (committed or known start)
+  std::optional<Adoption> adoption_;
+  bool slam_reset_ = false;
+  bool reloc_ran_ = false;  // relocalisation ran since the last start
+  RelocalizeProgress reloc_progress_;
+  MissionState after_reloc_ = MissionState::kModel;
+  size_t reloc_bumps_from_ = 0;  // bumps recorded while relocalising (local frame) from here
+  Pose2 local_to_map_;          // of the last commit
+  bool home_in_local_ = false;  // home_ was taken in a relocalisation's local frame
   std::string clean_summary_;
   double last_distance_ = 0;  // travelled, at the last step
 };

@@ -68,6 +68,20 @@ bool Modeler::CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& 
   return false;
 }
 
+void Modeler::Seed(const EnvironmentModel& saved, std::vector<TimedPose> saved_trajectory) {
+  model_ = saved;
+  prior_trajectory_ = std::move(saved_trajectory);
+  given_up_.clear();
+  closed_by_contour_.clear();
+  contour_loops_.clear();
+  next_id_ = 1;
+  for (const auto& o : saved.objects) {
+    next_id_ = std::max(next_id_, o.id + 1);
+    if (o.complete) closed_by_contour_.push_back(o.id);
+    if (o.given_up) given_up_.emplace_back(o.id, o.note);
+  }
+}
+
 void Modeler::GiveUp(int object_id, const std::string& why) {
   given_up_.emplace_back(object_id, why);
   for (auto& o : model_.objects) {
@@ -300,7 +314,13 @@ void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_l
 
 const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& lines,
                                         const std::vector<TimedPose>& trajectory) {
-  const std::vector<Side> sides = ToSides(lines, trajectory, options_.axis_tolerance_rad);
+  std::vector<TimedPose> with_prior;
+  if (!prior_trajectory_.empty()) {
+    with_prior = prior_trajectory_;
+    with_prior.insert(with_prior.end(), trajectory.begin(), trajectory.end());
+  }
+  const std::vector<Side> sides =
+      ToSides(lines, prior_trajectory_.empty() ? trajectory : with_prior, options_.axis_tolerance_rad);
   EnvironmentModel m;
   std::vector<bool> is_wall;
   m.room = FindRoom(sides, options_.collinear_m, &is_wall);

@@ -78,6 +78,13 @@ class Modeler {
   bool CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& loop,
                       const std::vector<slam::LineFeature>& lines,
                       const std::vector<TimedPose>& trajectory);
+  // Starts from a saved model (issue 14: a mission continuing in a saved map):
+  // its objects' ids are kept by the next Update (by their boxes, as ever),
+  // complete objects stay complete (a side inferred from a contour is not
+  // re-inferred without the contour), given-up ones stay given up. The saved
+  // trajectory tells from which side the saved lines were seen: every Update
+  // puts it before the trajectory it is given.
+  void Seed(const EnvironmentModel& saved, std::vector<TimedPose> saved_trajectory);
   // Marks an object as not completable (e.g. unreachable); it stays incomplete.
   void GiveUp(int object_id, const std::string& why);
   const EnvironmentModel& model() const { return model_; }
@@ -93,6 +100,7 @@ class Modeler {
   std::vector<std::pair<int, std::string>> given_up_;
   std::vector<int> closed_by_contour_;
   std::vector<std::vector<Eigen::Vector2d>> contour_loops_;  // map frame
+  std::vector<TimedPose> prior_trajectory_;  // Seed's (map frame)
 };
 
 }  // namespace irslam::control

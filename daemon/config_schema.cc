@@ -180,6 +180,9 @@ void WalkSlam(robot::CoreOptions* o, Visitor* v) {
   v->Section("calibration", "odometry self-calibration: wheel radius and track width scale factors in the EKF");
   v->Keys(&o->slam.calibration, slam::CalibrationKeys());
   v->End();
+  v->Section("resume", "continuing in a saved map: the relocalised pose's and the saved lines' uncertainty");
+  v->Keys(&o->slam.resume, slam::ResumeKeys());
+  v->End();
   v->End();
 }
 
@@ -219,6 +222,10 @@ void WalkConfig(DaemonSettings* s, Visitor* v) {
   v->End();
   v->Section("cleaning", "coverage planning and cleaning (mission.mode = \"clean\"; docs/cleaning.md)");
   v->Keys(&o->mission.cleaning, control::CleaningKeys());
+  v->End();
+  v->Section("relocalize", "relocalisation in the saved map at start, and the map's agreement after (docs/relocalization.md)");
+  v->Keys(&o->mission.relocalize.search, slam::RelocalizeKeys());
+  v->Keys(&o->mission.relocalize, control::RelocalizeKeys());
   v->End();
   v->Section("model", "the room and furniture from the line map (paper section 5)");
   v->Keys(&o->model, control::ModelKeys());

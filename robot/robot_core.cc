@@ -76,7 +76,8 @@ bool RobotCore::MotorEnable() const {
     case MissionState::kGoToP1:
     case MissionState::kContourFollow:
     case MissionState::kClean:
-    case MissionState::kReturnHome: return true;
+    case MissionState::kReturnHome:
+    case MissionState::kRelocalize: return true;
     default: return false;
   }
 }
@@ -123,6 +124,13 @@ std::vector<can_frame> RobotCore::Tick(double now_s) {
   const uint8_t gpio_bumpers = static_cast<uint8_t>((bump_left_.Poll(now_s) ? kBumperLeft : 0) |
                                                     (bump_right_.Poll(now_s) ? kBumperRight : 0));
   last_cmd_ = mission_.Step(now_s, slam_, ir_.scan(), motor_.bumpers() | gpio_bumpers);
+  // Issue 14: the mission committed to a pose in the saved map (the SLAM
+  // adopts it), or the map disagreed (a fresh local SLAM for a new search).
+  if (std::optional<control::Adoption> a = mission_.TakeAdoption()) {
+    slam_.AdoptMap(a->local_to_map, a->lines);
+    mission_.Adopted(now_s, slam_);
+  }
+  if (mission_.TakeSlamReset()) slam_.ForgetMap();
   std::vector<can_frame> out{motor_.MakeCommand(last_cmd_)};
   if (now_s - last_heartbeat_ >= options_.heartbeat_period_s - 1e-9) {
     last_heartbeat_ = now_s;
@@ -147,7 +155,38 @@ bool RobotCore::Start(double now_s, std::string* why) {
     mission_.ClearFault(now_s);
     if (mission_.state() != MissionState::kIdle && mission_.state() != MissionState::kDone) return true;
   }
-  return mission_.Start(now_s, why);
+  if (mission_.state() != MissionState::kIdle && mission_.state() != MissionState::kDone)
+    return mission_.Start(now_s, why);  // (refused: already running)
+  const bool live = !forget_live_ && slam_.num_lines() > 0 && mission_.model().room.box.has_value();
+  if (live) return mission_.StartKnown(now_s, slam_, why);
+  const bool in_map = saved_map_ && saved_map_->room.box.has_value() && !saved_map_->lines.empty();
+  if (!in_map) {
+    Renew(std::nullopt);
+    forget_live_ = false;
+    return mission_.Start(now_s, why);
+  }
+  Renew(saved_map_->calibration);
+  forget_live_ = false;
+  control::SavedMission saved;
+  saved.map = {saved_map_->lines, saved_map_->trajectory};
+  saved.model.room = saved_map_->room;
+  saved.model.objects = saved_map_->objects;
+  return mission_.StartInMap(now_s, std::move(saved), why);
+}
+
+void RobotCore::Renew(const std::optional<slam::CalibrationEstimate>& calibration) {
+  // Nothing mapped since boot and no calibration to start from: the SLAM and
+  // the mission are as new (kept as they are: the first mission of a process
+  // starts exactly as it always did).
+  if (slam_.num_lines() == 0 && !calibration) return;
+  slam::SlamOptions o = options_.slam;
+  if (calibration) o.initial_calibration = calibration;
+  else o.initial_calibration = slam_.calibration();
+  slam_ = slam::Slam(o);
+  const bool clean = mission_.clean_mode();
+  mission_ = Mission(options_.mission, options_.wall, options_.explore, options_.model, options_.slam);
+  mission_.SetCleanMode(clean);
+  if (work_clock_) mission_.SetWorkClock(work_clock_);
 }
 
 void RobotCore::Stop(double now_s) {
@@ -176,6 +215,10 @@ CoreStatus RobotCore::Status(double now_s) const {
   s.controller = {motor_.ControllerAlive(now_s), motor_.last_status()};
   s.frames = {motor_.counters(), ir_.counters()};
   if (mission_.clean().active()) s.cleaning = mission_.cleaning(now_s, slam_.distance_m());
+  if (const auto r = mission_.relocalize()) {
+    s.relocalize = RelocalizeStatus{r->committed,  r->started_t,  r->committed_t, r->hypotheses,
+                                    r->best_score, r->evidence_m, r->attempts};
+  }
   return s;
 }
 
@@ -183,8 +226,11 @@ MapSnapshot RobotCore::Map() const {
   const control::EnvironmentModel& model = mission_.model();
   MapSnapshot m{mission_.state(),    slam_.map_pose(), slam_.map_pose_cov(),     slam_.map_lines(),
                 model.room,          model.objects,    slam_.map_trajectory(), std::nullopt,
-                options_.slam.calibration.enabled ? std::optional(slam_.calibration()) : std::nullopt};
+                options_.slam.calibration.enabled ? std::optional(slam_.calibration()) : std::nullopt,
+                std::nullopt};
   if (mission_.clean().active()) m.cleaning = mission_.cleaning(slam_.time(), slam_.distance_m());
+  if (const auto r = mission_.relocalize(); r && r->committed && slam_.in_saved_map())
+    m.relocalized = MapSnapshot::Relocalized{r->committed_t, r->hypotheses};
   return m;
 }
 

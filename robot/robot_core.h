@@ -92,11 +92,21 @@ class RobotCore {
   MapSnapshot Map() const;
 
   // The map the next start works in (issue 14): the daemon's saved file or
-  // `irslam-sim run --map-in`. With one, start relocalises in it first (state
-  // relocalize) and then continues in its frame with its ids: cleaning when
-  // the saved room is modelled, else a modelling pass that completes what is
-  // incomplete. nullopt (start fresh): explore from nothing.
-  void SetSavedMap(std::optional<MapSnapshot> map) { saved_map_ = std::move(map); }
+  // `irslam-sim run --map-in`. What a start (from idle or done) does:
+  //  - the core's own live map has a modelled room (a mission ran in this
+  //    process since the last fresh start): it continues in it (state model,
+  //    then the configured work), the map's agreement checked as below;
+  //  - else, with a saved map that has a room: it relocalises in it first
+  //    (state relocalize, a fresh local SLAM), then continues in its frame with
+  //    its ids: a modelling pass that completes what is incomplete, then the
+  //    configured work (cleaning in mode clean). If the map later disagrees
+  //    with what the robot sees (it was carried elsewhere), it relocalises again;
+  //  - else it explores from nothing (a fresh SLAM).
+  // nullopt (the API's start {"fresh": true}) also forgets the live map.
+  void SetSavedMap(std::optional<MapSnapshot> map) {
+    if (!map) forget_live_ = true;
+    saved_map_ = std::move(map);
+  }
   const std::optional<MapSnapshot>& saved_map() const { return saved_map_; }
 
   MissionState state() const { return mission_.state(); }
@@ -109,7 +119,10 @@ class RobotCore {
 
   // A monotonic clock (ns) the shell lends the core to time its planning
   // (tick_profile.h); the core itself never reads a clock.
-  void SetWorkClock(control::WorkClock clock) { mission_.SetWorkClock(std::move(clock)); }
+  void SetWorkClock(control::WorkClock clock) {
+    work_clock_ = clock;
+    mission_.SetWorkClock(std::move(clock));
+  }
   int64_t planning_ns() const { return mission_.go_to().planning_ns(); }
   const control::PathPlanner::Stats& planner_stats() const { return mission_.go_to().planner_stats(); }
   // Ticks at which controller loss was not judged because the loop itself had
@@ -134,6 +147,11 @@ class RobotCore {
   uint64_t loop_stalls_ = 0;
   WheelCommand last_cmd_;
   std::optional<MapSnapshot> saved_map_;
+  bool forget_live_ = false;
+  control::WorkClock work_clock_;
+  // A fresh SLAM and mission (a start from nothing or in a saved map), the
+  // calibration carried over (the saved map's, else the live one's).
+  void Renew(const std::optional<slam::CalibrationEstimate>& calibration);
 };
 
 }  // namespace irslam::robot

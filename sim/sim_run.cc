@@ -97,6 +97,15 @@ SimOptions SimOptionsFrom(const robot::CoreOptions& core) {
 InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options, uint64_t seed,
                           double max_time_s,
                           const std::function<void(const InProcessRun&)>& on_tick,
+                          const FaultSpec* faults, robot::WorkClockNs work_clock,
+                          const std::optional<robot::MapSnapshot>& saved_map) {
+  RunSetup setup;
+  setup.saved_map = saved_map;
+  return RunInProcess(world, options, seed, max_time_s, on_tick, faults, std::move(work_clock), setup);
+}
+
+InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options, uint64_t seed,
+                          double max_time_s, const std::function<void(const InProcessRun&)>& on_tick,
                           const FaultSpec* faults, robot::WorkClockNs work_clock, const RunSetup& setup) {
   const robot::WorkClockNs now_ns = work_clock ? std::move(work_clock) : robot::WorkClockNs(NowNs);
   InProcessRun run;

@@ -48,7 +48,12 @@ InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options,
                           double max_time_s,
                           const std::function<void(const InProcessRun&)>& on_tick = nullptr,
                           const FaultSpec* faults = nullptr,
-                          robot::WorkClockNs work_clock = nullptr, const RunSetup& setup = RunSetup());
+                          robot::WorkClockNs work_clock = nullptr,
+                          const std::optional<robot::MapSnapshot>& saved_map = std::nullopt);
+// The same with a RunSetup: its saved_map, and stop_when to end the run early.
+InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options, uint64_t seed,
+                          double max_time_s, const std::function<void(const InProcessRun&)>& on_tick,
+                          const FaultSpec* faults, robot::WorkClockNs work_clock, const RunSetup& setup);
 
 // Whether p is a pose the robot can be put at in the world: inside the room,
 // outside every box, its centre at least clearance_m from every wall and box

@@ -138,6 +138,26 @@ int LineEkf::AddLine(const LineObservation& z, const Eigen::Matrix2d& r) {
   return static_cast<int>((n - kFirstLine) / 2);
 }
 
+void LineEkf::Restart(const Pose2& pose, const Eigen::Matrix3d& pose_cov,
+                      const std::vector<SavedLine>& lines) {
+  const Eigen::Vector3d calib = x_.segment<3>(kCalib);
+  const Eigen::Matrix3d calib_cov = P_.block<3, 3>(kCalib, kCalib);
+  const long n = kFirstLine + 2 * static_cast<long>(lines.size());
+  x_ = Eigen::VectorXd::Zero(n);
+  P_ = Eigen::MatrixXd::Zero(n, n);
+  x_.head<3>() << pose.x, pose.y, NormalizeAngle(pose.theta);
+  P_.topLeftCorner<3, 3>() = 0.5 * (pose_cov + pose_cov.transpose());
+  x_.segment<3>(kCalib) = calib;
+  P_.block<3, 3>(kCalib, kCalib) = calib_cov;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const int k = RhoIndex(static_cast<int>(i));
+    x_(k) = lines[i].rho;
+    x_(k + 1) = lines[i].theta;
+    P_.block<2, 2>(k, k) = 0.5 * (lines[i].cov + lines[i].cov.transpose());
+    NormalizeLineState(static_cast<int>(i));
+  }
+}
+
 void LineEkf::RemoveLine(int i) {
   const long at = RhoIndex(i), n = x_.size(), tail = n - at - 2;
   x_.segment(at, tail) = x_.tail(tail).eval();

@@ -82,6 +82,16 @@ class LineEkf {
                double min_sigma);
   // Appends a line from an observation (inverse model); returns its index.
   int AddLine(const LineObservation& z, const Eigen::Matrix2d& r);
+  // A saved map's line, for Restart.
+  struct SavedLine {
+    double rho = 0, theta = 0;
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  };
+  // Starts over in a saved map (issue 14): pose and its covariance, the saved
+  // lines with their own covariances and no cross-covariances (the saved file
+  // keeps only the 2x2 blocks; the pose-line correlations are rebuilt by the
+  // next updates); the calibration parameters and their covariance are kept.
+  void Restart(const Pose2& pose, const Eigen::Matrix3d& pose_cov, const std::vector<SavedLine>& lines);
   // Removes line i's rows and columns.
   void RemoveLine(int i);
 

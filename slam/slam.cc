@@ -58,6 +58,7 @@ CalibrationEstimate Slam::calibration() const {
 }
 
 double Slam::map_rotation() const {
+  if (saved_frame_) return 0;
   return ekf_.num_lines() > 0 ? NormalizeAngle(M_PI / 2 - ekf_.theta(0)) : 0.0;
 }
 
@@ -89,6 +90,52 @@ std::vector<TimedPose> Slam::map_trajectory() const {
   std::vector<TimedPose> out = trajectory_;
   for (auto& p : out) p.pose = ToMap(p.pose);
   return out;
+}
+
+void Slam::AdoptMap(const Pose2& local_to_map, const std::vector<LineFeature>& saved_lines) {
+  const ResumeOptions& ro = options_.resume;
+  const Eigen::Matrix2d floor =
+      Eigen::Vector2d(ro.line_sigma_rho_m * ro.line_sigma_rho_m,
+                      ro.line_sigma_theta_rad * ro.line_sigma_theta_rad)
+          .asDiagonal();
+  std::vector<LineEkf::SavedLine> state;
+  state.reserve(saved_lines.size());
+  for (const auto& l : saved_lines) {
+    Eigen::Matrix2d c = l.cov;
+    c(0, 0) = std::max(c(0, 0), floor(0, 0));
+    c(1, 1) = std::max(c(1, 1), floor(1, 1));
+    state.push_back({l.rho, l.theta, c});
+  }
+  const Eigen::Matrix3d pose_cov =
+      Eigen::Vector3d(ro.pose_sigma_m * ro.pose_sigma_m, ro.pose_sigma_m * ro.pose_sigma_m,
+                      ro.pose_sigma_rad * ro.pose_sigma_rad)
+          .asDiagonal();
+  ekf_.Restart(Compose(local_to_map, ekf_.pose()), pose_cov, state);
+  lines_ = saved_lines;
+  next_id_ = 1;
+  for (size_t i = 0; i < lines_.size(); ++i) {
+    // The state's normalised (rho >= 0) form; the endpoints are the saved ones.
+    lines_[i].rho = ekf_.rho(static_cast<int>(i));
+    lines_[i].theta = ekf_.theta(static_cast<int>(i));
+    lines_[i].cov = ekf_.LineCov(static_cast<int>(i));
+    next_id_ = std::max(next_id_, lines_[i].id + 1);
+  }
+  for (auto& p : trajectory_) p.pose = Compose(local_to_map, p.pose);
+  gate_rejections_in_a_row_ = 0;
+  saved_frame_ = true;
+}
+
+void Slam::ForgetMap() {
+  const ResumeOptions& ro = options_.resume;
+  const Eigen::Matrix3d pose_cov =
+      Eigen::Vector3d(ro.pose_sigma_m * ro.pose_sigma_m, ro.pose_sigma_m * ro.pose_sigma_m,
+                      ro.pose_sigma_rad * ro.pose_sigma_rad)
+          .asDiagonal();
+  ekf_.Restart(ekf_.pose(), pose_cov, {});
+  lines_.clear();
+  trajectory_.clear();
+  gate_rejections_in_a_row_ = 0;
+  saved_frame_ = false;
 }
 
 int Slam::IndexOf(int id) const {
@@ -481,6 +528,19 @@ options::Table<PdsOptions> PdsKeys() {
       {"window_m", &P::window_m, 0.05, 10, "m", "the window closes after this distance ..."},
       {"window_rad", &P::window_rad, 0.05, 10, "rad", "... or this rotation"},
       {"max_range_m", &P::max_range_m, 0.1, 10, "m", "readings beyond this are not used for mapping"},
+  };
+  return kKeys;
+}
+
+options::Table<ResumeOptions> ResumeKeys() {
+  using R = ResumeOptions;
+  static constexpr options::Key<R> kKeys[] = {
+      {"pose_sigma_m", &R::pose_sigma_m, 0.001, 1, "m",
+       "position uncertainty of the pose relocalised in a saved map"},
+      {"pose_sigma_rad", &R::pose_sigma_rad, 0.001, 1, "rad", "... and of its heading"},
+      {"line_sigma_rho_m", &R::line_sigma_rho_m, 0, 1, "m",
+       "a saved line's rho keeps at least this uncertainty when a mission continues in its map"},
+      {"line_sigma_theta_rad", &R::line_sigma_theta_rad, 0, 1, "rad", "... and its theta this"},
   };
   return kKeys;
 }

@@ -74,6 +74,19 @@ struct CalibrationEstimate {
   double ratio_sigma = 0;  // of value.ratio() (from the full covariance; 0 when not known)
 };
 
+// Continuing in a saved map (issue 14, Slam::AdoptMap): the uncertainty the
+// relocalised pose starts with, and the least uncertainty a saved line keeps
+// (a saved map's covariances are its own filter's, without the pose-line
+// correlations that made them so small: a floor keeps the first updates from
+// being overconfident).
+struct ResumeOptions {
+  double pose_sigma_m = 0.03;
+  double pose_sigma_rad = 0.02;
+  double line_sigma_rho_m = 0.005;
+  double line_sigma_theta_rad = 0.005;
+};
+options::Table<ResumeOptions> ResumeKeys();  // [slam.resume]
+
 struct SlamOptions {
   RobotGeometry geometry;
   MotionNoise motion_noise;
@@ -86,6 +99,7 @@ struct SlamOptions {
   PdsOptions pds;
   ExtractionOptions extraction;
   AssociationOptions association;
+  ResumeOptions resume;
 };
 
 struct LineFeature {
@@ -153,6 +167,22 @@ class Slam {
   const std::vector<ExtractedLine>& last_window_lines() const { return last_window_lines_; }
   const SlamOptions& options() const { return options_; }
 
+  // Continues in a saved map (issue 14): the relocaliser found that this
+  // SLAM's frame maps to the saved map's frame by local_to_map. From now on the
+  // internal frame is the saved map's frame and stays it (map_rotation() 0):
+  // the EKF's lines are replaced by the saved ones (map frame, ids kept, the
+  // next new line numbered after them), the pose is carried over by the
+  // transform with the [slam.resume] uncertainty, the trajectory so far is
+  // transformed, and the calibration is kept. The local lines are dropped: they
+  // are the saved lines seen again (those that are not come back as new lines
+  // when seen again).
+  void AdoptMap(const Pose2& local_to_map, const std::vector<LineFeature>& saved_lines);
+  // Starts a new local map where the robot is (issue 14: the map disagreed and
+  // the robot relocalises again): the lines and the trajectory are dropped, the
+  // pose and the odometry (its distance too) go on, the frame is its own again.
+  void ForgetMap();
+  bool in_saved_map() const { return saved_frame_; }
+
   // Feeds one window's extracted lines (robot frame) to the map; public so tests
   // can drive association and the EKF without the PDS.
   void ProcessLines(const std::vector<ExtractedLine>& lines);
@@ -182,6 +212,7 @@ class Slam {
   std::vector<ExtractedLine> last_window_lines_;
   int next_id_ = 1;
   int gate_rejections_in_a_row_ = 0;
+  bool saved_frame_ = false;  // AdoptMap: the internal frame is a saved map's
 
   // Recent odometry poses (for scans stamped between encoder frames) and scans
   // waiting for the odometry to reach their time.

@@ -1,0 +1,106 @@
+// Working in a saved map (issue 14): the mission's relocalisation behaviour
+// and the check that the map still agrees once it has committed.
+//
+// Relocalize: at a start with a saved map (or when the map stopped agreeing)
+// the robot follows walls with a fresh local SLAM; after every closed PDS
+// window its lines and trajectory go to the line-correspondence search
+// (slam/relocalizer.h), whose decision is the commit. The mission then asks
+// the SLAM to adopt the saved map (Slam::AdoptMap) and carries on in its frame.
+//
+// MapAgreement: after the commit, every closed window's association outcome
+// (lines matched to the map vs lines the map did not explain: inserted with no
+// mapped line near them, rejected by the innovation gate, or at an angle the
+// map does not have; collinear pieces of mapped lines count for neither) is kept over the last `check_windows`
+// windows. In a known room nearly every line matches; when most do not, the
+// map disagrees (the robot was carried elsewhere, or the commit was wrong):
+// the mission relocalises again in the map as it was `check_windows` windows
+// earlier (checkpoints of the map frame's lines and trajectory), so lines
+// inserted from the wrong pose do not stay in the map. A wrong commit is worse
+// than a slow one (the issue): this is the "keeps checking" half of that.
+// Pure: no clock, socket or file.
+#ifndef IRSLAM_CONTROL_RELOCALIZE_H_
+#define IRSLAM_CONTROL_RELOCALIZE_H_
+
+#include <deque>
+#include <optional>
+#include <vector>
+
+#include "slam/relocalizer.h"
+#include "slam/slam.h"
+#include "types/geometry.h"
+#include "types/options.h"
+
+namespace irslam::control {
+
+struct RelocalizeOptions {
+  slam::RelocalizeOptions search;  // [relocalize] (the line-correspondence search)
+  int check_windows = 12;          // windows judged together after the commit
+  int min_lines_judged = 8;        // ... once they hold at least this many lines
+  double min_agreement = 0.3;      // matched share below this: the map disagrees
+  int max_attempts = 5;            // relocalisations in one mission before giving the map up
+};
+options::Table<RelocalizeOptions> RelocalizeKeys();  // [relocalize], beside slam::RelocalizeKeys()
+
+// The saved map's part the search and the SLAM need (map frame).
+struct SavedLines {
+  std::vector<slam::LineFeature> lines;
+  std::vector<TimedPose> trajectory;
+};
+
+class Relocalize {
+ public:
+  explicit Relocalize(RelocalizeOptions options) : options_(options) {}
+
+  // Starts a search in `map` at robot time t (the local SLAM is fresh).
+  void Begin(double t, SavedLines map);
+  // One control period with the local SLAM: updates the search after each new
+  // window; returns the transform local -> map frame once it commits.
+  std::optional<slam::PoseHypothesis> Step(double t, const slam::Slam& local);
+  bool active() const { return search_.has_value(); }
+  // Searching longer than search.max_time_s.
+  bool TimedOut(double t) const { return active() && t - started_t_ > options_.search.max_time_s; }
+  void End() { search_.reset(); }
+
+  const SavedLines& map() const { return map_; }
+  double started_t() const { return started_t_; }
+  int hypotheses() const { return search_ ? static_cast<int>(search_->hypotheses().size()) : 0; }
+  double best_score() const;
+  double evidence_m() const { return search_ ? search_->evidence_m() : 0; }
+  const slam::Relocalizer* search() const { return search_ ? &*search_ : nullptr; }
+
+ private:
+  RelocalizeOptions options_;
+  SavedLines map_;
+  std::optional<slam::Relocalizer> search_;
+  double started_t_ = 0;
+  int windows_seen_ = -1;
+};
+
+class MapAgreement {
+ public:
+  explicit MapAgreement(RelocalizeOptions options) : options_(options) {}
+
+  // Committed: judging starts now (the SLAM has adopted the saved map).
+  void Reset(const slam::Slam& slam);
+  // After each control period: false when the map disagrees (see above).
+  bool Step(const slam::Slam& slam);
+  // The map as it was check_windows windows ago (map frame), to relocalise in.
+  const SavedLines& checkpoint() const { return checkpoints_.front(); }
+  // Matched share over the judged windows (1 while too few lines).
+  double agreement() const { return agreement_; }
+
+ private:
+  struct Window {
+    int matched = 0;
+    int unexplained = 0;
+  };
+  RelocalizeOptions options_;
+  slam::SlamStats last_;
+  std::deque<Window> windows_;
+  std::deque<SavedLines> checkpoints_;
+  double agreement_ = 1;
+};
+
+}  // namespace irslam::control
+
+#endif  // IRSLAM_CONTROL_RELOCALIZE_H_

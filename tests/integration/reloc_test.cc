@@ -1,0 +1,174 @@
+// Relocalisation in a saved map (issue 14), in process: a map is made by one
+// mission, then missions start from it at other poses (the world's start
+// replaced) and must relocalise, keep the saved frame and ids, and finish.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <random>
+
+#include "daemon/core_json.h"
+#include "robot/robot_core.h"
+#include "sim/sim_run.h"
+#include "tests/testing/worlds.h"
+
+namespace irslam {
+namespace {
+
+struct Made {
+  robot::MapSnapshot map;
+  Pose2 world_from_map;  // a map-frame pose -> the world frame
+};
+
+// One exploring mission; the map frame relates to the world by the final
+// estimated and true poses (the estimate is a few cm off: the tolerances below
+// allow for it).
+Made MakeMap(const sim::World& world, uint64_t seed) {
+  sim::InProcessRun run = sim::RunInProcess(world, robot::DefaultCoreOptions(), seed, 900);
+  EXPECT_EQ(run.core->state(), control::MissionState::kDone);
+  Made m;
+  m.map = run.core->Map();
+  const Pose2 est = m.map.pose, truth = run.sim->true_pose();
+  const double th = NormalizeAngle(truth.theta - est.theta);
+  const double c = std::cos(th), s = std::sin(th);
+  m.world_from_map = {truth.x - (c * est.x - s * est.y), truth.y - (s * est.x + c * est.y), th};
+  return m;
+}
+
+bool Free(const sim::World& w, double x, double y, double margin) {
+  const sim::Box b = w.Bounds();
+  if (x < b.xmin + margin || x > b.xmax - margin || y < b.ymin + margin || y > b.ymax - margin) return false;
+  for (const auto& seg : w.Segments()) {
+    sim::Vec2 closest;
+    if (sim::PointSegmentDistance({x, y}, seg, &closest) < margin) return false;
+  }
+  for (const auto& o : w.objects) {
+    if (x > o.xmin && x < o.xmax && y > o.ymin && y < o.ymax) return false;
+  }
+  return true;
+}
+
+Pose2 RandomFreePose(const sim::World& w, std::mt19937_64* rng) {
+  const sim::Box b = w.Bounds();
+  std::uniform_real_distribution<double> ux(b.xmin, b.xmax), uy(b.ymin, b.ymax), ut(-M_PI, M_PI);
+  for (int i = 0; i < 10000; ++i) {
+    const double x = ux(*rng), y = uy(*rng);
+    if (Free(w, x, y, 0.3)) return {x, y, ut(*rng)};
+  }
+  ADD_FAILURE() << "no free pose";
+  return w.start;
+}
+
+struct RelocResult {
+  bool committed = false;
+  double commit_t = -1;
+  double err_at_commit_m = 0, err_at_commit_rad = 0;
+  double max_err_after_m = 0, max_err_after_rad = 0;  // from 5 s after the commit on
+  control::MissionState end = control::MissionState::kIdle;
+  robot::MapSnapshot map;
+  std::string reason;
+  int attempts = 0;
+};
+
+RelocResult Relocalise(const sim::World& world, const Made& made, const Pose2& start, uint64_t seed,
+                       double max_time_s, bool clean) {
+  sim::World w = world;
+  w.start = start;
+  RelocResult r;
+  std::optional<slam::SlamStats> s0;
+  const auto on_tick = [&](const sim::InProcessRun& run) {
+    if (!s0 && run.core->state() == control::MissionState::kClean) s0 = run.core->slam().stats();
+    const auto st = run.core->Status(run.t);
+    if (!st.relocalize || !st.relocalize->committed || !run.core->slam().in_saved_map()) return;
+    const Pose2 est = Compose(made.world_from_map, run.core->slam().map_pose());
+    const Pose2& truth = run.sim->true_pose();
+    const double e = std::hypot(est.x - truth.x, est.y - truth.y);
+    const double a = std::abs(NormalizeAngle(est.theta - truth.theta));
+    if (!r.committed) {
+      r.committed = true;
+      r.commit_t = st.relocalize->committed_t;
+      r.err_at_commit_m = e;
+      r.err_at_commit_rad = a;
+    } else if (std::getenv("RELOC_DEBUG") && std::fmod(run.t, 2.0) < 0.02) {
+      const auto& ss = run.core->slam().stats();
+      std::printf("  t %.1f %s err %.3f %.2f deg upd %d ins %d gate %d lines %zu coll %zu sd %.3f %.2f| %s\n", run.t,
+                  control::ToString(run.core->state()), e, a * 180 / M_PI, ss.updates, ss.insertions,
+                  ss.rejected_gate, run.core->slam().num_lines(), static_cast<size_t>(run.sim->collisions()),
+                  st.slam.pose_std[0], st.slam.pose_std[2] * 180 / M_PI, st.mission.reason.c_str());
+    }
+    if (r.committed && run.t > r.commit_t + 5) {
+      r.max_err_after_m = std::max(r.max_err_after_m, e);
+      r.max_err_after_rad = std::max(r.max_err_after_rad, a);
+    }
+  };
+  robot::CoreOptions options = robot::DefaultCoreOptions();
+  if (clean) options.mission.mode = "clean";
+  if (std::getenv("RELOC_NOCHECK")) options.mission.relocalize.min_agreement = 0;
+  sim::InProcessRun run = sim::RunInProcess(w, options, seed, max_time_s, on_tick, nullptr, nullptr, made.map);
+  if (s0 && std::getenv("RELOC_DEBUG")) {
+    const auto& s = run.core->slam().stats();
+    std::printf("reloc clean: windows %d ins %d coll %d declined %d upd %d gate %d angle %d; lines %zu\n",
+                s.windows - s0->windows, s.insertions - s0->insertions, s.collinear_insertions - s0->collinear_insertions,
+                s.collinear_declined - s0->collinear_declined, s.updates - s0->updates,
+                s.rejected_gate - s0->rejected_gate, s.rejected_angle - s0->rejected_angle, run.core->slam().num_lines());
+  }
+  r.end = run.core->state();
+  r.reason = run.core->Status(run.t).mission.reason;
+  r.attempts = run.core->Status(run.t).relocalize ? run.core->Status(run.t).relocalize->attempts : 0;
+  r.map = run.core->Map();
+  return r;
+}
+
+TEST(RelocTest, Fig14FromRandomPosesCommitsRightKeepsIdsAndFinishes) {
+  const sim::World world = testing::LoadTestWorld("fig14");
+  const Made made = MakeMap(world, 1);
+  std::mt19937_64 rng(7);
+  int right = 0, wrong = 0;
+  const int runs = 5;
+  for (int i = 0; i < runs; ++i) {
+    const Pose2 start = RandomFreePose(world, &rng);
+    const RelocResult r = Relocalise(world, made, start, 10 + i, 1500, true);
+    SCOPED_TRACE("run " + std::to_string(i) + " start " + std::to_string(start.x) + "," +
+                 std::to_string(start.y) + "," + std::to_string(start.theta));
+    std::printf("run %d: committed %d at %.1f s, err %.3f m %.2f deg, after %.3f m %.2f deg, end %s (%s), attempts %d\n", i,
+                r.committed, r.commit_t, r.err_at_commit_m, r.err_at_commit_rad * 180 / M_PI, r.max_err_after_m,
+                r.max_err_after_rad * 180 / M_PI, control::ToString(r.end), r.reason.c_str(), r.attempts);
+    if (!r.committed) continue;
+    if (r.err_at_commit_m > 0.2 || r.err_at_commit_rad > 10 * M_PI / 180) {
+      ++wrong;
+      continue;
+    }
+    ++right;
+    EXPECT_EQ(r.end, control::MissionState::kDone);
+    EXPECT_LE(r.max_err_after_m, 0.1);
+    // The saved lines keep their ids.
+    for (const auto& l : made.map.lines) {
+      EXPECT_TRUE(std::any_of(r.map.lines.begin(), r.map.lines.end(),
+                              [&](const slam::LineFeature& m) { return m.id == l.id; }))
+          << "line " << l.id;
+    }
+    EXPECT_TRUE(r.map.relocalized.has_value());
+  }
+  EXPECT_EQ(wrong, 0);
+  EXPECT_GE(right, runs - 1);
+}
+
+}  // namespace
+}  // namespace irslam
+namespace irslam {
+TEST(RelocDebug, NormalCleanInsertions) {
+  const sim::World world = testing::LoadTestWorld("fig14");
+  robot::CoreOptions options = robot::DefaultCoreOptions();
+  options.mission.mode = "clean";
+  std::optional<slam::SlamStats> s0;
+  sim::InProcessRun run = sim::RunInProcess(world, options, 1, 2000, [&](const sim::InProcessRun& r) {
+    if (!s0 && r.core->state() == control::MissionState::kClean) s0 = r.core->slam().stats();
+  });
+  const auto& s = run.core->slam().stats();
+  std::printf("normal clean: during cleaning windows %d ins %d coll %d declined %d upd %d gate %d angle %d; lines %zu\n",
+              s.windows - s0->windows, s.insertions - s0->insertions, s.collinear_insertions - s0->collinear_insertions,
+              s.collinear_declined - s0->collinear_declined, s.updates - s0->updates,
+              s.rejected_gate - s0->rejected_gate, s.rejected_angle - s0->rejected_angle, run.core->slam().num_lines());
+}
+}  // namespace irslam
