@@ -57,14 +57,15 @@ nlohmann::json Daemon::Start(const rpc::Request& req) {
   const bool running = core_->state() != control::MissionState::kIdle && core_->state() != control::MissionState::kDone &&
                        core_->state() != control::MissionState::kFault;
   if (!running) core_->SetCleanMode(mode == "clean");
-  const bool forget = fresh && !running && saved_map_.has_value();
+  // fresh: the core forgets the saved map and its own live map (RobotCore::SetSavedMap).
+  const bool forget = fresh && !running;
   if (forget) core_->SetSavedMap(std::nullopt);
   std::string why;
   if (!core_->Start(now, &why)) {
     if (forget) GiveSavedMap();  // not started: nothing forgotten
     return rpc::MakeError(req.id, rpc::kRejected, "start rejected: " + why);
   }
-  if (forget) {
+  if (forget && saved_map_) {
     saved_map_.reset();
     std::fprintf(stderr, "<6>irslamd: start fresh: the saved map is forgotten (its file is replaced at the next save)\n");
   }
