@@ -180,9 +180,10 @@ class MapReader {
   bool Int(const json& j, const std::string& at, int* out, int64_t lo, int64_t hi) {
     if (!ok_) return false;
     if (!j.is_number_integer()) return Fail(at, "not an integer");
-    const int64_t v = j.get<int64_t>();
-    if (j.is_number_unsigned() && j.get<uint64_t>() > static_cast<uint64_t>(hi)) return Fail(at, "out of range");
-    if (v < lo || v > hi) return Fail(at, "out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    const bool too_big = j.is_number_unsigned() && j.get<uint64_t>() > static_cast<uint64_t>(hi);
+    const int64_t v = too_big ? hi : j.get<int64_t>();
+    if (too_big || v < lo || v > hi)
+      return Fail(at, "out of range [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
     *out = static_cast<int>(v);
     return true;
   }

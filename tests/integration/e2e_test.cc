@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <boost/crc.hpp>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -458,6 +459,70 @@ TEST_F(E2eTest, WholeMissionOverTheBusEndsDoneWithTheRoomModelled) {
   // is then remembered and never hit again.
   const nlohmann::json truth = StopSimAndReadTruth();
   EXPECT_LE(truth["collisions"].get<int>(), 1) << "contacts [t, x, y]: " << truth["collision_points"].dump();
+}
+
+// Issue 14 through the real processes: the map an earlier run left in the state
+// directory (made here by irslam-sim run, stored as irslamd stores it) is loaded
+// at start; `start` relocalises in it and the mission goes on in its frame with
+// its ids; `start --fresh` explores from nothing instead.
+TEST_F(E2eTest, ARestartedDaemonRelocalisesInTheSavedMap) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "relocalisation quality is judged in the uninstrumented build";
+#endif
+  std::string out;
+  ASSERT_EQ(RunCommand({kSim, "run", "--world", kSrc + "/tests/worlds/fig14.json", "--map-out", dir_ + "/day1.json"},
+                       &out, 120),
+            0)
+      << out;
+  std::string error;
+  const auto day1 = ParseJsonText(testing::ReadFile(dir_ + "/day1.json"), &error);
+  ASSERT_TRUE(day1) << error;
+  {
+    // daemon/map_store.h's file: the map with its CRC-32.
+    boost::crc_32_type crc;
+    const std::string body = day1->dump();
+    crc.process_bytes(body.data(), body.size());
+    char hex[9];
+    std::snprintf(hex, sizeof hex, "%08x", crc.checksum());
+    std::filesystem::create_directories(StateDir());
+    std::ofstream(StateDir() + "/map.json")
+        << nlohmann::json{{"format", "irslam-map"}, {"version", 1}, {"seq", 7}, {"reason", "stop"},
+                          {"map", *day1}, {"crc32", hex}}.dump() << "\n";
+  }
+  StartOptions o;
+  o.world = "fig14.json";
+  StartAll(o);
+  EXPECT_EQ(Status().value()["map_store"]["seq"], 7);
+  EXPECT_NE(testing::ReadFile(dir_ + "/daemon.log").find("the next start relocalises in the saved map"),
+            std::string::npos);
+  ASSERT_EQ(Ctl({"start"}, &out), 0) << out;
+  bool relocalising = false, committed = false;
+  const auto end = Clock::now() + std::chrono::duration<double>(WallS(60));
+  while (Clock::now() < end && !committed) {
+    const auto s = Status().value();
+    relocalising |= s["state"] == "relocalize";
+    committed = s.contains("relocalize") && s["relocalize"]["committed"] == true;
+    Sleep(0.05);
+  }
+  EXPECT_TRUE(relocalising);
+  ASSERT_TRUE(committed) << Status().value().dump();
+  WaitRobotTime(Status().value()["robot_time"].get<double>() + 5);
+  ASSERT_EQ(Ctl({"map", "--out", dir_ + "/day2.json"}, &out), 0) << out;
+  const auto day2 = ParseJsonText(testing::ReadFile(dir_ + "/day2.json"), &error);
+  ASSERT_TRUE(day2) << error;
+  EXPECT_TRUE((*day2)["relocalized"].is_object()) << (*day2).dump().substr(0, 400);
+  std::set<int> ids;
+  for (const auto& l : (*day2)["lines"]) ids.insert(l["id"].get<int>());
+  size_t kept = 0;
+  for (const auto& l : (*day1)["lines"]) kept += ids.count(l["id"].get<int>());
+  EXPECT_GE(kept, (*day1)["lines"].size() * 3 / 4) << "the saved map's line ids";
+  ASSERT_EQ(Ctl({"stop"}, &out), 0) << out;
+  // Fresh: explores from nothing.
+  ASSERT_EQ(Ctl({"start", "--fresh"}, &out), 0) << out;
+  WaitRobotTime(Status().value()["robot_time"].get<double>() + 1);
+  const auto s = Status().value();
+  EXPECT_EQ(s["state"], "wall_follow") << s.dump().substr(0, 400);
+  ASSERT_EQ(Ctl({"stop"}, &out), 0) << out;
 }
 
 TEST_F(E2eTest, SighupReloadsAGoodConfigAndKeepsTheOldOneOnABadOne) {

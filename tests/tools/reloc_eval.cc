@@ -52,11 +52,11 @@ RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options, const
   world.start = start;
   sim::RunSetup setup;
   setup.saved_map = saved;
-  double next_sample = 0, wrong_since = -1;
+  double wrong_since = -1;
   bool first_after_commit = true;
   const auto on_tick = [&](const sim::InProcessRun& run) {
-    if (run.t < next_sample) return;
-    next_sample = run.t + 0.1;
+    // Every period: a commit can be followed by done within a period or two
+    // (nothing left to model), and the run ends there.
     const robot::CoreStatus st = run.core->Status(run.t);
     if (!st.relocalize) return;
     const bool committed = st.relocalize->committed;
@@ -93,6 +93,12 @@ RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options, const
   r.end_state = run.error.empty() ? control::ToString(run.core->state()) : "not started: " + run.error;
   r.end_t = run.t;
   const robot::MapSnapshot out = run.core->Map();
+  if (!r.committed && out.relocalized) {
+    // Committed after the last period's status (cannot be scored for error).
+    r.committed = true;
+    r.commit_t = out.relocalized->t;
+    r.hypotheses = out.relocalized->hypotheses;
+  }
   r.saved_lines = static_cast<int>(saved.lines.size());
   r.kept_ids = KeptLineIds(saved.lines, out.lines);
   r.duplicates = DuplicateLines(saved.lines, out.lines);

@@ -212,6 +212,7 @@ TEST(MapParseTest, EachMalformedFieldIsOneClearLine) {
       {"/lines/0", 5, "map.lines[0]: not an object"},
       {"/lines/1/id", 2.5, "map.lines[1].id: not an integer"},
       {"/lines/1/id", -3, "map.lines[1].id: out of range [0, 2147483647]"},
+      {"/lines/1/id", 18446744073709551615u, "map.lines[1].id: out of range [0, 2147483647]"},
       {"/lines/1/id", 1, "map.lines[1].id: line 1 is in the map twice"},
       {"/lines/2/rho", json::value_t::discarded, "map.lines[2].rho: missing"},
       {"/lines/2/cov/0/1", "a", "map.lines[2].cov[0][1]: not a number"},
