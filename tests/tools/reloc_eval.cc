@@ -73,7 +73,10 @@ RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options, const
       r.at_commit = e;
       first_after_commit = false;
     }
-    if (run.t >= r.commit_t + 5) r.max_after = Max(r.max_after, e);
+    if (run.t >= r.commit_t + 5) {
+      r.max_after = Max(r.max_after, e);
+      r.after_sampled = true;
+    }
     r.final_error = e;
     // Confidently wrong: committed and off for recover_s in a row (a return to
     // relocalising, or the error shrinking, ends the episode).
@@ -102,6 +105,8 @@ RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options, const
   r.saved_lines = static_cast<int>(saved.lines.size());
   r.kept_ids = KeptLineIds(saved.lines, out.lines);
   r.duplicates = DuplicateLines(saved.lines, out.lines);
+  // Still off when the run ended (done, or the time limit): never recovered.
+  if (wrong_since >= 0) r.confidently_wrong = true;
   r.correct = r.committed && !r.confidently_wrong && !Wrong(r.final_error, ro);
   return r;
 }
@@ -238,7 +243,7 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
         "more than "
      << F(ro.wrong_position_m * 100, 0) << " cm / " << F(ro.wrong_heading_rad * kDeg, 0)
      << "° off and not back within " << F(ro.recover_s, 0)
-     << " s. *Correct*: committed, never confidently wrong, within those bounds at the end.\n\n";
+     << " s, or still off when the run ended. *Correct*: committed, never confidently wrong, within those bounds at the end.\n\n";
   md << "| world | map | fit rms cm | runs | committed | correct | confidently wrong | time to relocalise s median | "
         "worst | error at commit cm median / max | heading at commit deg max | max error after (from commit + 5 s) "
         "cm / deg | saved ids kept | duplicate lines |\n"
@@ -247,6 +252,7 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
     int committed = 0, correct = 0, wrong = 0, kept = 0, saved = 0, dups = 0;
     std::vector<double> times, at_commit;
     double heading_max = 0, after_m = 0, after_deg = 0, at_commit_max = 0;
+    bool any_after = false;
     for (const RelocRun& r : w.runs) {
       committed += r.committed;
       correct += r.correct;
@@ -259,6 +265,8 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
       at_commit.push_back(r.at_commit.position_m * 100);
       at_commit_max = std::max(at_commit_max, r.at_commit.position_m * 100);
       heading_max = std::max(heading_max, r.at_commit.heading_rad * kDeg);
+      if (!r.after_sampled) continue;
+      any_after = true;
       after_m = std::max(after_m, r.max_after.position_m * 100);
       after_deg = std::max(after_deg, r.max_after.heading_rad * kDeg);
     }
@@ -270,7 +278,7 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
        << pct(correct) << " | " << wrong << " | " << (any ? F(Quantile(times, 0.5)) : "-") << " | "
        << (any ? F(Quantile(times, 1.0)) : "-") << " | "
        << (any ? F(Quantile(at_commit, 0.5)) + " / " + F(at_commit_max) : "-") << " | "
-       << (any ? F(heading_max) : "-") << " | " << (any ? F(after_m) + " / " + F(after_deg) : "-") << " | "
+       << (any ? F(heading_max) : "-") << " | " << (any_after ? F(after_m) + " / " + F(after_deg) : "-") << " | "
        << kept << "/" << saved << " | " << dups << " |\n";
   }
   md << "\n## Every run\n\n"

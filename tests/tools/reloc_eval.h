@@ -69,8 +69,10 @@ struct RelocRun {
   int attempts = 0;          // status.relocalize.attempts at the end
   PoseError at_commit;       // the first tick after the commit
   PoseError max_after;       // over the rest of the run (from 5 s after the commit)
+  bool after_sampled = false;  // the run lasted that long
   PoseError final_error;
   bool confidently_wrong = false;  // committed, > 20 cm or 10 deg off, not recovered within 30 s
+                                   // (or still off when the run ended)
   bool correct = false;            // committed and the error at commit within 20 cm and 10 deg, never wrong
   int saved_lines = 0, kept_ids = 0, duplicates = 0;
 };
