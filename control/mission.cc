@@ -76,7 +76,8 @@ Mission::Mission(MissionOptions options, WallFollowerOptions wall, ExploreOption
       clean_mode_(options.mode == "clean"),
       model_options_(model),
       reloc_(options.relocalize),
-      agreement_(options.relocalize) {}
+      agreement_(options.relocalize),
+      changes_(options.relocalize.changes) {}
 
 void Mission::Enter(MissionState s, double t, std::string reason) {
   state_ = s;
@@ -116,7 +117,30 @@ void Mission::Reset(double t) {
   slam_reset_ = false;
   reloc_ran_ = false;
   reloc_.End();
+  changes_.Clear();
+  line_removals_.clear();
 }
+
+void Mission::WatchChanges(const slam::Slam& slam, const std::vector<TimedPose>& trajectory) {
+  changes_.Reset(slam.map_lines(), trajectory, modeler_.model());
+}
+
+void Mission::StepChanges(const slam::Slam& slam) {
+  // (In a saved map the SLAM's frame is the map's: its lines need no copy.)
+  const std::vector<int> moved = slam.in_saved_map() ? changes_.Step(slam.map_pose(), slam.lines())
+                                                     : changes_.Step(slam.map_pose(), slam.map_lines());
+  for (int id : moved) {
+    const auto& objects = modeler_.model().objects;
+    const auto o = std::find_if(objects.begin(), objects.end(), [&](const auto& x) { return x.id == id; });
+    if (o == objects.end()) continue;
+    const std::vector<int> stale = changes_.StaleLinesOf(id, slam.in_saved_map() ? slam.lines() : slam.map_lines());
+    line_removals_.insert(line_removals_.end(), stale.begin(), stale.end());
+    modeler_.NoteMoved(id, o->box);
+    reason_ += "; object " + std::to_string(id) + " is not where it was";
+  }
+}
+
+void Mission::LinesRemoved(const slam::Slam& slam) { modeler_.Update(slam.map_lines(), slam.map_trajectory()); }
 
 bool Mission::Start(double t, std::string* why) {
   if (!CanStart(state_, reason_, why)) return false;
@@ -146,6 +170,7 @@ bool Mission::StartKnown(double t, const slam::Slam& slam, std::string* why) {
   Reset(t);
   agreement_.Reset(slam);
   checking_ = true;
+  WatchChanges(slam, slam.map_trajectory());
   survey_.Exhaust();  // the room was surveyed when it was modelled
   Enter(MissionState::kModel, t,
         "continuing in the map (" + std::to_string(slam.num_lines()) + " lines)");
@@ -211,6 +236,7 @@ void Mission::Adopted(double t, const slam::Slam& slam) {
   if (home_set_ && home_in_local_) home_ = Compose(local_to_map_, home_);
   home_in_local_ = false;
   bumps_.TransformSince(reloc_bumps_from_, local_to_map_);
+  if (reloc_progress_.attempts == 1) WatchChanges(slam, reloc_.map().trajectory);
   reloc_.End();
   agreement_.Reset(slam);
   checking_ = true;
@@ -299,7 +325,9 @@ WheelCommand Mission::ToWheels(const Twist& tw, double dt) {
 }
 
 bool Mission::Watchdogs(double t, const slam::Slam& slam) {
-  const bool cleaning = state_ == MissionState::kClean || state_ == MissionState::kReturnHome;
+  // (Relocalising again while cleaning counts as cleaning: its own time limit.)
+  const bool cleaning = state_ == MissionState::kClean || state_ == MissionState::kReturnHome ||
+                        (state_ == MissionState::kRelocalize && after_reloc_ != MissionState::kModel);
   if (cleaning ? t - clean_started_ > options_.cleaning.max_time_s
                : t - started_at_ > options_.max_time_s) {
     if (cleaning) clean_.SetState(CleanState::kStopped, t, slam.distance_m());
@@ -340,6 +368,7 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
   }
   if (!Watchdogs(t, slam)) return Halt();
   if (!CheckAgreement(t, slam)) return Halt();
+  if (checking_ && state_ != MissionState::kRelocalize) StepChanges(slam);
   switch (state_) {
     case MissionState::kRelocalize:
       return StepRelocalize(t, dt, slam, scan, bumpers != 0);
@@ -561,6 +590,7 @@ WheelCommand Mission::StepReturnHome(double t, double dt, const slam::Slam& slam
       break;
   }
   clean_.SetState(CleanState::kDone, t, slam.distance_m());
+  if (checking_) modeler_.Update(slam.map_lines(), slam.map_trajectory());  // what cleaning saw
   return To(MissionState::kDone, t, clean_summary_ + ", back home");
 }
 

@@ -47,6 +47,7 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "control/bump_memory.h"
@@ -141,6 +142,10 @@ class Mission {
   // (then call Adopted with it), or restart from nothing for a new search.
   std::optional<Adoption> TakeAdoption();
   bool TakeSlamReset();
+  // Lines to take out of the map (furniture that moved): the core removes them
+  // from the SLAM and then calls LinesRemoved.
+  std::vector<int> TakeLineRemovals() { return std::exchange(line_removals_, {}); }
+  void LinesRemoved(const slam::Slam& slam);
   void Adopted(double t, const slam::Slam& slam);
   // Relocalisation since the last start (none when the mission did not start in a map).
   std::optional<RelocalizeProgress> relocalize() const;
@@ -261,6 +266,11 @@ class Mission {
   RelocalizeProgress reloc_progress_;
   MissionState after_reloc_ = MissionState::kModel;
   size_t reloc_bumps_from_ = 0;  // bumps recorded while relocalising (local frame) from here
+  MapChanges changes_;
+  std::vector<int> line_removals_;
+  // Watches the saved furniture for moves (after a commit or a known start).
+  void WatchChanges(const slam::Slam& slam, const std::vector<TimedPose>& trajectory);
+  void StepChanges(const slam::Slam& slam);
   Pose2 local_to_map_;          // of the last commit
   bool home_in_local_ = false;  // home_ was taken in a relocalisation's local frame
   std::string clean_summary_;

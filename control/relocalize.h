@@ -25,6 +25,7 @@
 #include <optional>
 #include <vector>
 
+#include "control/map_changes.h"
 #include "slam/relocalizer.h"
 #include "slam/slam.h"
 #include "types/geometry.h"
@@ -38,6 +39,7 @@ struct RelocalizeOptions {
   int min_lines_judged = 8;        // ... once they hold at least this many lines
   double min_agreement = 0.3;      // matched share below this: the map disagrees
   int max_attempts = 5;            // relocalisations in one mission before giving the map up
+  MapChangeOptions changes;        // moved furniture (map_changes.h)
 };
 options::Table<RelocalizeOptions> RelocalizeKeys();  // [relocalize], beside slam::RelocalizeKeys()
 

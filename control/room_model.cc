@@ -41,6 +41,8 @@ options::Table<ModelOptions> ModelKeys() {
        "an object this close to a wall touches it"},
       {"wall_reach_m", &O::wall_reach_m, 0, 2, "m",
        "a side ending this close to a wall (along it) runs into it"},
+      {"same_size_m", &O::same_size_m, 0, 2, "m",
+       "a piece of furniture that moved since the saved map is recognised by its size within this"},
   };
   return kKeys;
 }
@@ -68,8 +70,20 @@ bool Modeler::CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& 
   return false;
 }
 
+void Modeler::NoteMoved(int id, const Box& was) {
+  moved_.emplace_back(id, was);
+  model_.objects.erase(std::remove_if(model_.objects.begin(), model_.objects.end(),
+                                      [&](const ObjectModel& o) { return o.id == id; }),
+                       model_.objects.end());
+}
+
 void Modeler::Seed(const EnvironmentModel& saved, std::vector<TimedPose> saved_trajectory) {
   model_ = saved;
+  seeded_ = true;
+  saved_ids_.clear();
+  moved_.clear();
+  notes_.clear();
+  for (const auto& o : saved.objects) saved_ids_.push_back(o.id);
   prior_trajectory_ = std::move(saved_trajectory);
   given_up_.clear();
   closed_by_contour_.clear();
@@ -270,6 +284,32 @@ ObjectModel BuildObject(const std::vector<Side>& sides, const std::vector<size_t
 
 }  // namespace
 
+void Modeler::NameNewObject(ObjectModel* obj) {
+  // Not in the saved map: a piece that moved (about the same size), or a new one.
+  const auto same = std::find_if(moved_.begin(), moved_.end(), [&](const auto& mv) {
+    const Box& b = mv.second;
+    const bool upright = std::abs(b.width() - obj->box.width()) <= options_.same_size_m &&
+                         std::abs(b.height() - obj->box.height()) <= options_.same_size_m;
+    const bool turned = std::abs(b.width() - obj->box.height()) <= options_.same_size_m &&
+                        std::abs(b.height() - obj->box.width()) <= options_.same_size_m;
+    return upright || turned;
+  });
+  std::string note;
+  if (same != moved_.end()) {
+    obj->id = same->first;
+    const Box& b = same->second;
+    const double dx = 0.5 * (obj->box.xmin + obj->box.xmax - b.xmin - b.xmax);
+    const double dy = 0.5 * (obj->box.ymin + obj->box.ymax - b.ymin - b.ymax);
+    const auto cm = [](double v) { return std::to_string(static_cast<int>(std::lround(100 * v))); };
+    note = "moved since the saved map by " + cm(std::hypot(dx, dy)) + " cm (was at [" + cm(b.xmin) + ", " +
+           cm(b.ymin) + ", " + cm(b.xmax) + ", " + cm(b.ymax) + "] cm)";
+    moved_.erase(same);
+  } else {
+    note = "new since the saved map";
+  }
+  notes_.emplace_back(obj->id, note);
+}
+
 void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop) {
   // Stable ids: an object keeps the id of the previous object it overlaps most.
   std::vector<bool> taken(model_.objects.size(), false);
@@ -293,6 +333,10 @@ void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_l
       obj.id = model_.objects[static_cast<size_t>(best_k)].id;
     } else {
       obj.id = next_id_++;
+      if (seeded_) NameNewObject(&obj);
+    }
+    for (const auto& [nid, note] : notes_) {
+      if (nid == obj.id && obj.note.empty()) obj.note = note;
     }
     // Gone all round (now or in an earlier call): one side is inferred.
     const bool contoured =

@@ -25,6 +25,7 @@ struct ModelOptions {
                                      // (gaps narrower than the robot are not passable anyway)
   double wall_contact_m = 0.15;      // an object this close to a wall touches it
   double wall_reach_m = 0.35;        // a side ending this close to a wall (along it) runs into it
+  double same_size_m = 0.15;         // a moved piece is recognised by its size within this
 };
 options::Table<ModelOptions> ModelKeys();  // [model]
 
@@ -85,6 +86,11 @@ class Modeler {
   // trajectory tells from which side the saved lines were seen: every Update
   // puts it before the trajectory it is given.
   void Seed(const EnvironmentModel& saved, std::vector<TimedPose> saved_trajectory);
+  // Object `id` of the saved map is not where it was (map_changes.h): the next
+  // object found that is not in the saved map and has about its size (within
+  // same_size_m) is taken to be it: it keeps its id, with a note saying where
+  // it was. Other objects not in the saved map are noted as new.
+  void NoteMoved(int id, const Box& was);
   // Marks an object as not completable (e.g. unreachable); it stays incomplete.
   void GiveUp(int object_id, const std::string& why);
   const EnvironmentModel& model() const { return model_; }
@@ -93,6 +99,7 @@ class Modeler {
   // Gives the new model's objects the ids of the old ones they overlap most (new
   // ids otherwise), and applies closed contours and given-up notes.
   void AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop);
+  void NameNewObject(ObjectModel* obj);
 
   ModelOptions options_;
   EnvironmentModel model_;
@@ -101,6 +108,10 @@ class Modeler {
   std::vector<int> closed_by_contour_;
   std::vector<std::vector<Eigen::Vector2d>> contour_loops_;  // map frame
   std::vector<TimedPose> prior_trajectory_;  // Seed's (map frame)
+  bool seeded_ = false;
+  std::vector<int> saved_ids_;                     // Seed's objects
+  std::vector<std::pair<int, Box>> moved_;         // NoteMoved, not found again yet
+  std::vector<std::pair<int, std::string>> notes_; // kept on the object while it is complete
 };
 
 }  // namespace irslam::control

@@ -226,6 +226,7 @@ void WalkConfig(DaemonSettings* s, Visitor* v) {
   v->Section("relocalize", "relocalisation in the saved map at start, and the map's agreement after (docs/relocalization.md)");
   v->Keys(&o->mission.relocalize.search, slam::RelocalizeKeys());
   v->Keys(&o->mission.relocalize, control::RelocalizeKeys());
+  v->Keys(&o->mission.relocalize.changes, control::MapChangeKeys());
   v->End();
   v->Section("model", "the room and furniture from the line map (paper section 5)");
   v->Keys(&o->model, control::ModelKeys());

@@ -108,113 +108,146 @@ void PrintStatus(const nlohmann::json& s) {
   std::printf("uptime:     %s s\n", Num(s.value("uptime", 0.0), 1).c_str());
 }
 
+// What the command line asked for: the subcommand that was chosen (the others
+// stay null after parsing) and the options of each.
+struct CtlArgs {
+  std::string socket_path;
+  CLI::App* status = nullptr;
+  bool json_out = false;
+  CLI::App* start = nullptr;
+  std::string mode;
+  bool fresh = false;
+  CLI::App* clean = nullptr;
+  CLI::App* stop = nullptr;
+  CLI::App* map = nullptr;
+  std::string out_path, svg_path, pgm_path;
+  double pgm_res = kDefaultPgmResolutionM;
+  CLI::App* wait = nullptr;
+  std::string want_state;
+  double timeout = 0;
+  CLI::App* watch = nullptr;
+};
+
+void AddCommands(CLI::App& app, CtlArgs* a) {
+  app.add_option("--socket", a->socket_path,
+                 "irslamd control socket (default $IRSLAM_SOCKET or /run/irslam/irslamd.sock)");
+  app.require_subcommand(1);
+  a->status = app.add_subcommand("status", "Show the daemon's status");
+  a->status->add_flag("--json", a->json_out, "Print the raw JSON");
+  a->start = app.add_subcommand("start", "Start the mission (exploration; --mode clean: then clean)");
+  a->start->add_option("--mode", a->mode, "explore (map only) or clean (map, clean, return to the start); "
+                                          "default: the daemon's mission.mode")
+      ->check(CLI::IsMember({"explore", "clean"}));
+  a->start->add_flag("--fresh", a->fresh,
+                     "Forget the saved map: explore from nothing instead of relocalising in it");
+  a->clean = app.add_subcommand("clean", "Start the mission in mode clean");
+  a->stop = app.add_subcommand("stop", "Stop the robot");
+  a->map = app.add_subcommand("map", "Fetch the map");
+  a->map->add_option("--out", a->out_path, "Write the map JSON here (default: stdout)");
+  a->map->add_option("--svg", a->svg_path, "Also draw it as SVG");
+  a->map->add_option("--pgm", a->pgm_path, "Also write an occupancy grid FILE.pgm and FILE.yaml (ROS map_server)");
+  a->map->add_option("--pgm-resolution", a->pgm_res, "Cell size of --pgm in metres")
+      ->check(CLI::Range(0.005, 1.0))
+      ->capture_default_str();
+  a->wait = app.add_subcommand("wait", "Wait until the mission reaches a state");
+  a->wait->add_option("--state", a->want_state,
+                      "idle, wall_follow, model, go_to_p1, contour_follow, clean, return_home, done, fault")
+      ->required();
+  a->wait->add_option("--timeout", a->timeout, "Give up after this many seconds (default: never)");
+  a->watch = app.add_subcommand("watch", "Show state, pose, map and CAN counters live");
+}
+
+int RunStatus(RpcClient& client, const CtlArgs& a) {
+  std::string error;
+  auto s = client.Call("status", nlohmann::json::object(), kCallTimeout, &error);
+  if (!s) return Fail(error);
+  if (a.json_out) {
+    std::printf("%s\n", s->dump(2).c_str());
+  } else {
+    PrintStatus(*s);
+  }
+  return 0;
+}
+
+// start, clean and stop: one call, the state it answers with.
+int RunMissionCommand(RpcClient& client, const CtlArgs& a) {
+  const bool start = a.start->parsed(), clean = a.clean->parsed();
+  nlohmann::json params = nlohmann::json::object();
+  if (start && !a.mode.empty()) params["mode"] = a.mode;
+  if (start && a.fresh) params["fresh"] = true;
+  std::string error;
+  auto r = client.Call(start ? "start" : (clean ? "clean" : "stop"), params, kCallTimeout, &error);
+  if (!r) return Fail(error);
+  std::printf("state: %s\n", r->value("state", "?").c_str());
+  return 0;
+}
+
+int RunMap(RpcClient& client, const CtlArgs& a) {
+  std::string error;
+  auto m = client.Call("map", nlohmann::json::object(), 30, &error);
+  if (!m) return Fail(error);
+  if (a.out_path.empty() && a.svg_path.empty() && a.pgm_path.empty()) {
+    std::printf("%s\n", m->dump(1).c_str());
+  }
+  if (!a.out_path.empty() && !WriteFileReplacing(a.out_path, m->dump(1) + "\n")) {
+    return Fail("cannot write " + a.out_path);
+  }
+  if (!a.svg_path.empty() && !WriteFileReplacing(a.svg_path, RenderMapSvg(*m, nullptr, nullptr))) {
+    return Fail("cannot write " + a.svg_path);
+  }
+  if (!a.pgm_path.empty() && !WritePgmMap(*m, a.pgm_path, a.pgm_res, &error)) return Fail(error);
+  return 0;
+}
+
+// wait and watch: follow the status notifications, until the wanted state
+// (wait) or for ever (watch, one line per notification).
+int RunFollow(RpcClient& client, const CtlArgs& a) {
+  const bool wait = a.wait->parsed();
+  std::string error;
+  auto r = client.Call("subscribe", {{"rate", wait ? 20 : 4}}, kCallTimeout, &error);
+  if (!r) return Fail(error);
+  const auto t0 = std::chrono::steady_clock::now();
+  const bool tty = ::isatty(STDOUT_FILENO);
+  for (;;) {
+    double left = 3600 * 24;
+    if (wait && a.timeout > 0) {
+      left = a.timeout - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (left <= 0) return Fail("timed out waiting for state " + a.want_state);
+    }
+    auto s = client.NextNotification(std::min(left, 5.0), &error);
+    if (!s) {
+      if (error.rfind("timed out", 0) == 0) continue;
+      return Fail(error);
+    }
+    if (wait) {
+      if (s->value("state", "") == a.want_state) return 0;
+      continue;
+    }
+    std::printf(tty ? "\r\033[K%s" : "%s\n", StatusLine(*s).c_str());
+    std::fflush(stdout);
+  }
+}
+
 }  // namespace
 }  // namespace irslam
 
 int main(int argc, char** argv) {
   using namespace irslam;
   CLI::App app{"irslamctl: control and watch irslamd"};
-  std::string socket_path;
-  app.add_option("--socket", socket_path,
-                 "irslamd control socket (default $IRSLAM_SOCKET or /run/irslam/irslamd.sock)");
-  app.require_subcommand(1);
-  bool json_out = false;
-  auto* status = app.add_subcommand("status", "Show the daemon's status");
-  status->add_flag("--json", json_out, "Print the raw JSON");
-  auto* start = app.add_subcommand("start", "Start the mission (exploration; --mode clean: then clean)");
-  std::string mode;
-  bool fresh = false;
-  start->add_option("--mode", mode, "explore (map only) or clean (map, clean, return to the start); "
-                                    "default: the daemon's mission.mode")
-      ->check(CLI::IsMember({"explore", "clean"}));
-  start->add_flag("--fresh", fresh, "Forget the saved map: explore from nothing instead of relocalising in it");
-  auto* clean = app.add_subcommand("clean", "Start the mission in mode clean");
-  auto* stop = app.add_subcommand("stop", "Stop the robot");
-  std::string out_path, svg_path;
-  auto* map = app.add_subcommand("map", "Fetch the map");
-  map->add_option("--out", out_path, "Write the map JSON here (default: stdout)");
-  map->add_option("--svg", svg_path, "Also draw it as SVG");
-  std::string pgm_path;
-  double pgm_res = irslam::kDefaultPgmResolutionM;
-  map->add_option("--pgm", pgm_path, "Also write an occupancy grid FILE.pgm and FILE.yaml (ROS map_server)");
-  map->add_option("--pgm-resolution", pgm_res, "Cell size of --pgm in metres")
-      ->check(CLI::Range(0.005, 1.0))
-      ->capture_default_str();
-  std::string want_state;
-  double timeout = 0;
-  auto* wait = app.add_subcommand("wait", "Wait until the mission reaches a state");
-  wait->add_option("--state", want_state,
-                   "idle, wall_follow, model, go_to_p1, contour_follow, clean, return_home, done, fault")
-      ->required();
-  wait->add_option("--timeout", timeout, "Give up after this many seconds (default: never)");
-  auto* watch = app.add_subcommand("watch", "Show state, pose, map and CAN counters live");
+  CtlArgs args;
+  AddCommands(app, &args);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   }
-  if (socket_path.empty()) socket_path = DefaultSocketPath();
+  if (args.socket_path.empty()) args.socket_path = DefaultSocketPath();
   RpcClient client;
   std::string error;
-  if (!client.Connect(socket_path, &error)) return Fail(error);
-
-  if (*status) {
-    auto s = client.Call("status", nlohmann::json::object(), kCallTimeout, &error);
-    if (!s) return Fail(error);
-    if (json_out) {
-      std::printf("%s\n", s->dump(2).c_str());
-    } else {
-      PrintStatus(*s);
-    }
-    return 0;
-  }
-  if (*start || *stop || *clean) {
-    nlohmann::json params = nlohmann::json::object();
-    if (*start && !mode.empty()) params["mode"] = mode;
-    if (*start && fresh) params["fresh"] = true;
-    auto r = client.Call(*start ? "start" : (*clean ? "clean" : "stop"), params, kCallTimeout, &error);
-    if (!r) return Fail(error);
-    std::printf("state: %s\n", r->value("state", "?").c_str());
-    return 0;
-  }
-  if (*map) {
-    auto m = client.Call("map", nlohmann::json::object(), 30, &error);
-    if (!m) return Fail(error);
-    if (out_path.empty() && svg_path.empty() && pgm_path.empty()) {
-      std::printf("%s\n", m->dump(1).c_str());
-    }
-    if (!out_path.empty() && !WriteFileReplacing(out_path, m->dump(1) + "\n")) {
-      return Fail("cannot write " + out_path);
-    }
-    if (!svg_path.empty() && !WriteFileReplacing(svg_path, RenderMapSvg(*m, nullptr, nullptr))) {
-      return Fail("cannot write " + svg_path);
-    }
-    if (!pgm_path.empty() && !irslam::WritePgmMap(*m, pgm_path, pgm_res, &error)) return Fail(error);
-    return 0;
-  }
-  if (*wait || *watch) {
-    auto r = client.Call("subscribe", {{"rate", *wait ? 20 : 4}}, kCallTimeout, &error);
-    if (!r) return Fail(error);
-    const auto t0 = std::chrono::steady_clock::now();
-    const bool tty = ::isatty(STDOUT_FILENO);
-    for (;;) {
-      double left = 3600 * 24;
-      if (*wait && timeout > 0) {
-        left = timeout - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        if (left <= 0) return Fail("timed out waiting for state " + want_state);
-      }
-      auto s = client.NextNotification(std::min(left, 5.0), &error);
-      if (!s) {
-        if (error.rfind("timed out", 0) == 0) continue;
-        return Fail(error);
-      }
-      if (*wait) {
-        if (s->value("state", "") == want_state) return 0;
-        continue;
-      }
-      std::printf(tty ? "\r\033[K%s" : "%s\n", StatusLine(*s).c_str());
-      std::fflush(stdout);
-    }
-  }
+  if (!client.Connect(args.socket_path, &error)) return Fail(error);
+  if (*args.status) return RunStatus(client, args);
+  if (*args.start || *args.stop || *args.clean) return RunMissionCommand(client, args);
+  if (*args.map) return RunMap(client, args);
+  if (*args.wait || *args.watch) return RunFollow(client, args);
   return 0;
 }

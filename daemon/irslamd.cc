@@ -233,6 +233,11 @@ void Daemon::Tick() {
 }
 
 void Daemon::OnStateChange(double now) {
+  // Each finished cleaning cell is saved (rate-limited like every save), so the
+  // progress survives a crash of the daemon (issue 13).
+  const int cells_done = core_->cleaning_cells_done();
+  if (cells_done > last_cells_done_) maps_.Save("cell", [this] { return LiveMap(); });
+  last_cells_done_ = cells_done;
   if (core_->state() == last_state_) return;
   // Each model completion is saved (the model step just ended).
   if (last_state_ == control::MissionState::kModel) maps_.Save("model", [this] { return LiveMap(); });

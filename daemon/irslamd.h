@@ -147,6 +147,7 @@ class Daemon : public ApiServer::Dispatcher {
   robot::TickProfile profile_;
   int64_t frames_ns_ = 0;  // OnFrame since the last tick
   control::MissionState last_state_ = control::MissionState::kIdle;
+  int last_cells_done_ = 0;  // cleaning cells finished at the last tick
   bool running_ = false;
   int exit_status_ = 0;
   AccessPolicy access_;

@@ -159,60 +159,45 @@ nlohmann::json StatsJson(const ReplayStats& s, const Timing& timing, double seco
           {"speed_cpu", cpu > 0 ? span / cpu : 0.0}};
 }
 
-int Main(int argc, char** argv) {
-  CLI::App app{"irslam-replay: feed a recorded candump -L log through irslamd's core offline and write its map"};
+struct ReplayArgs {
   std::vector<std::string> logs;
-  std::string map_out, svg_out, config_path, stats_out;
-  double time_scale = 0;
-  app.add_option("log", logs, "candump -L log(s), oldest first")->required();
-  app.add_option("--map-out", map_out, "Write the map here (contracts §4)");
-  app.add_option("--svg", svg_out, "Draw the map as SVG");
-  std::string pgm_out;
+  std::string map_out, svg_out, pgm_out, config_path, stats_out;
   double pgm_res = kDefaultPgmResolutionM;
-  app.add_option("--pgm", pgm_out, "Write the map as an occupancy grid FILE.pgm and FILE.yaml (ROS map_server)");
-  app.add_option("--pgm-resolution", pgm_res, "Cell size of --pgm in metres")
+  double time_scale = 0;
+};
+
+void AddOptions(CLI::App& app, ReplayArgs* a) {
+  app.add_option("log", a->logs, "candump -L log(s), oldest first")->required();
+  app.add_option("--map-out", a->map_out, "Write the map here (contracts §4)");
+  app.add_option("--svg", a->svg_out, "Draw the map as SVG");
+  app.add_option("--pgm", a->pgm_out, "Write the map as an occupancy grid FILE.pgm and FILE.yaml (ROS map_server)");
+  app.add_option("--pgm-resolution", a->pgm_res, "Cell size of --pgm in metres")
       ->check(CLI::Range(0.005, 1.0))
       ->capture_default_str();
-  app.add_option("--config", config_path, "The daemon's config file (the same as when recording)");
-  app.add_option("--time-scale", time_scale,
+  app.add_option("--config", a->config_path, "The daemon's config file (the same as when recording)");
+  app.add_option("--time-scale", a->time_scale,
                  "Robot seconds per log second (default: the recorder's header, else from the WHEEL_CMD spacing)")
       ->check(CLI::Range(0.01, 1000.0));
-  app.add_option("--stats", stats_out, "Write the replay's counts as JSON here");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
-  }
-  robot::CoreOptions core = robot::DefaultCoreOptions();
-  std::string error;
-  if (!config_path.empty() && !LoadCoreConfigFile(config_path, &core, &error)) {
-    std::fprintf(stderr, "irslam-replay: %s\n", error.c_str());
-    return 2;
-  }
-  Timing timing;
-  if (!FindTiming(logs, core.period_s, time_scale, &timing, &error)) {
-    std::fprintf(stderr, "irslam-replay: %s\n", error.c_str());
-    return 1;
-  }
-  const auto begin = std::chrono::steady_clock::now();
-  const double cpu_begin = CpuSeconds();
-  Replay replay(core, timing.origin_ns, timing.time_scale);
-  if (timing.feed_from_ns) replay.SkipControllerFramesBefore(*timing.feed_from_ns);
-  if (timing.noted) replay.SetNoted();
+  app.add_option("--stats", a->stats_out, "Write the replay's counts as JSON here");
+}
+
+// Feeds every frame and noted event of the logs to the replay, in order. false
+// (with *error set) on a read error or a line earlier than the one before.
+bool FeedLogs(const std::vector<std::string>& logs, Replay* replay, std::string* error) {
   LogReader reader(logs);
   LogLine line;
   std::optional<int64_t> last_stamp;
   std::string text;
-  while (reader.Next(&line, &error, &text)) {
+  while (reader.Next(&line, error, &text)) {
     if (line.kind == LogLine::Kind::kComment) {
       if (const auto event = ParseEventComment(text)) {
         line.stamp_ns = event->stamp_ns;  // checked for order below, like a frame
         if (last_stamp && line.stamp_ns < *last_stamp) {
-          std::fprintf(stderr, "irslam-replay: %s: event before the previous line's time\n", reader.Where().c_str());
-          return 1;
+          *error = reader.Where() + ": event before the previous line's time";
+          return false;
         }
         last_stamp = line.stamp_ns;
-        replay.OnEvent(*event);
+        replay->OnEvent(*event);
       }
       continue;
     }
@@ -220,38 +205,36 @@ int Main(int argc, char** argv) {
     // The core's time never runs backwards: a log out of order (files in the wrong
     // order, two logs mixed) is refused, not half replayed.
     if (last_stamp && line.stamp_ns < *last_stamp) {
-      std::fprintf(stderr, "irslam-replay: %s: time stamp %.6f s before the previous line's (files out of order?)\n",
-                   reader.Where().c_str(), static_cast<double>(*last_stamp - line.stamp_ns) * 1e-9);
-      return 1;
+      char b[64];
+      std::snprintf(b, sizeof b, "%.6f", static_cast<double>(*last_stamp - line.stamp_ns) * 1e-9);
+      *error = reader.Where() + ": time stamp " + b + " s before the previous line's (files out of order?)";
+      return false;
     }
     last_stamp = line.stamp_ns;
-    replay.Feed(line);
+    replay->Feed(line);
   }
-  if (!error.empty()) {
-    std::fprintf(stderr, "irslam-replay: %s\n", error.c_str());
-    return 1;
+  return error->empty();
+}
+
+// The map (JSON, SVG, PGM) and the stats, where the command line asked for them.
+bool WriteOutputs(const ReplayArgs& a, const nlohmann::json& map, const nlohmann::json& stats, std::string* error) {
+  if (!a.map_out.empty() && !WriteFileReplacing(a.map_out, map.dump(1) + "\n")) {
+    *error = "cannot write " + a.map_out;
+    return false;
   }
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
-  const double cpu = CpuSeconds() - cpu_begin;
-  const ReplayStats& s = replay.stats();
-  const nlohmann::json map = ToJson(replay.core().Map());
-  if (!map_out.empty() && !WriteFileReplacing(map_out, map.dump(1) + "\n")) {
-    std::fprintf(stderr, "irslam-replay: cannot write %s\n", map_out.c_str());
-    return 1;
+  if (!a.svg_out.empty() && !WriteFileReplacing(a.svg_out, RenderMapSvg(map, nullptr, nullptr))) {
+    *error = "cannot write " + a.svg_out;
+    return false;
   }
-  if (!svg_out.empty() && !WriteFileReplacing(svg_out, RenderMapSvg(map, nullptr, nullptr))) {
-    std::fprintf(stderr, "irslam-replay: cannot write %s\n", svg_out.c_str());
-    return 1;
+  if (!a.pgm_out.empty() && !WritePgmMap(map, a.pgm_out, a.pgm_res, error)) return false;
+  if (!a.stats_out.empty() && !WriteFileReplacing(a.stats_out, stats.dump(1) + "\n")) {
+    *error = "cannot write " + a.stats_out;
+    return false;
   }
-  if (!pgm_out.empty() && !WritePgmMap(map, pgm_out, pgm_res, &error)) {
-    std::fprintf(stderr, "irslam-replay: %s\n", error.c_str());
-    return 1;
-  }
-  const nlohmann::json stats = StatsJson(s, timing, seconds, cpu);
-  if (!stats_out.empty() && !WriteFileReplacing(stats_out, stats.dump(1) + "\n")) {
-    std::fprintf(stderr, "irslam-replay: cannot write %s\n", stats_out.c_str());
-    return 1;
-  }
+  return true;
+}
+
+void PrintSummary(const ReplayStats& s, const Timing& timing, double seconds, double cpu, const nlohmann::json& map) {
   std::fprintf(stderr,
                "irslam-replay: %llu frames, %llu ticks (time scale %g from %s); %s; commands as recorded %llu of %llu, "
                "states %llu of %llu; %.1f s of robot time in %.3f s (%.0fx real time; CPU %.3f s: %.0fx); state %s, %zu lines, "
@@ -267,6 +250,45 @@ int Main(int argc, char** argv) {
                map["state"].get<std::string>().c_str(),
                map["lines"].size(), map["objects"].size());
   if (!s.start_error.empty()) std::fprintf(stderr, "irslam-replay: a start was refused: %s\n", s.start_error.c_str());
+}
+
+int Main(int argc, char** argv) {
+  CLI::App app{"irslam-replay: feed a recorded candump -L log through irslamd's core offline and write its map"};
+  ReplayArgs args;
+  AddOptions(app, &args);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  robot::CoreOptions core = robot::DefaultCoreOptions();
+  std::string error;
+  if (!args.config_path.empty() && !LoadCoreConfigFile(args.config_path, &core, &error)) {
+    std::fprintf(stderr, "irslam-replay: %s\n", error.c_str());
+    return 2;
+  }
+  Timing timing;
+  if (!FindTiming(args.logs, core.period_s, args.time_scale, &timing, &error)) {
+    std::fprintf(stderr, "irslam-replay: %s\n", error.c_str());
+    return 1;
+  }
+  const auto begin = std::chrono::steady_clock::now();
+  const double cpu_begin = CpuSeconds();
+  Replay replay(core, timing.origin_ns, timing.time_scale);
+  if (timing.feed_from_ns) replay.SkipControllerFramesBefore(*timing.feed_from_ns);
+  if (timing.noted) replay.SetNoted();
+  if (!FeedLogs(args.logs, &replay, &error)) {
+    std::fprintf(stderr, "irslam-replay: %s\n", error.c_str());
+    return 1;
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - begin).count();
+  const double cpu = CpuSeconds() - cpu_begin;
+  const nlohmann::json map = ToJson(replay.core().Map());
+  if (!WriteOutputs(args, map, StatsJson(replay.stats(), timing, seconds, cpu), &error)) {
+    std::fprintf(stderr, "irslam-replay: %s\n", error.c_str());
+    return 1;
+  }
+  PrintSummary(replay.stats(), timing, seconds, cpu, map);
   return 0;
 }
 

@@ -131,6 +131,10 @@ std::vector<can_frame> RobotCore::Tick(double now_s) {
     mission_.Adopted(now_s, slam_);
   }
   if (mission_.TakeSlamReset()) slam_.ForgetMap();
+  if (const std::vector<int> gone = mission_.TakeLineRemovals(); !gone.empty()) {
+    slam_.RemoveLines(gone);
+    mission_.LinesRemoved(slam_);
+  }
   std::vector<can_frame> out{motor_.MakeCommand(last_cmd_)};
   if (now_s - last_heartbeat_ >= options_.heartbeat_period_s - 1e-9) {
     last_heartbeat_ = now_s;

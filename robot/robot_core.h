@@ -110,6 +110,8 @@ class RobotCore {
   const std::optional<MapSnapshot>& saved_map() const { return saved_map_; }
 
   MissionState state() const { return mission_.state(); }
+  // Cleaning cells finished since the mission started (0 when not cleaning).
+  int cleaning_cells_done() const { return mission_.clean().progress().cells_done; }
   const slam::Slam& slam() const { return slam_; }
   const drivers::MotorClient& motor() const { return motor_; }
   const drivers::IrConditioner& ir() const { return ir_; }

@@ -1,6 +1,7 @@
 // irslam-sim: the simulated motor controller and world (contracts.md §2).
 //   irslam-sim run   --world W.json [--seed S] [--max-time SECONDS] --map-out map.json --truth-out truth.json
 //                    [--map-in MAP.json] [--start X,Y,THETA]
+//   irslam-sim run   --world W.json --baseline bounce [--max-time SECONDS] [--map-out R.json] [--svg R.svg]
 //   irslam-sim serve --can IFACE --world W.json [--seed S] [--time-scale K] [--truth-out truth.json]
 #include <CLI/CLI.hpp>
 #include <boost/asio/io_context.hpp>
@@ -22,6 +23,8 @@
 #include "drivers/can_bus.h"
 #include "proto/codec.h"
 #include "io/json_text.h"
+#include "sim/bounce.h"
+#include "sim/coverage.h"
 #include "sim/faults.h"
 #include "sim/generator.h"
 #include "sim/sim_controller.h"
@@ -293,6 +296,54 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
   return 0;
 }
 
+// run --baseline bounce: the random-bounce cleaner (sim/bounce.h) instead of the
+// mission, for --max-time of robot time (default: the cleaning budget,
+// [cleaning].max_time_s), scored against the truth like planned cleaning
+// (sim/coverage.h): the true body disc's sweep of the floor it could reach.
+int RunBounceBaseline(const Common& c, double max_time, const std::string& map_out, const std::string& svg_out) {
+  World world;
+  robot::CoreOptions core_opts;
+  uint64_t seed;
+  if (!Load(c, &world, &core_opts, &seed)) return kExitUsage;
+  if (max_time <= 0) max_time = core_opts.mission.cleaning.max_time_s;
+  const auto sim = RunBounce(world, core_opts, seed, max_time);
+  const nlohmann::json truth = sim->Truth();
+  std::vector<TimedPose> traj;
+  for (const auto& p : truth["trajectory"]) traj.push_back({p[0], {p[1], p[2], p[3]}});
+  const double radius = core_opts.slam.geometry.radius_m;
+  std::vector<std::pair<double, double>> curve;
+  const CoverageScore cov = ScoreCoverage(world, radius, traj, 0, max_time, 0.02, &curve);
+  // The map file's cleaning block (contracts §7) with the true numbers, so what
+  // reads a cleaning run's reads the baseline's; no lines, no cells.
+  const nlohmann::json result = {
+      {"baseline", "bounce"},
+      {"seed", seed},
+      {"state", "done"},
+      {"trajectory", truth["trajectory"]},
+      {"cleaning",
+       {{"state", "done"}, {"started_t", 0.0}, {"finished_t", max_time}, {"covered_m2", cov.covered_m2},
+        {"total_m2", cov.reachable_m2}, {"fraction", cov.fraction}, {"path_m", cov.path_m},
+        {"width_m", 2 * radius}, {"cells", nlohmann::json::array()}, {"curve", curve}}}};
+  if (!WriteJson(map_out, result) || !WriteJson(c.truth_out, truth)) {
+    std::fprintf(stderr, "irslam-sim: cannot write %s\n", (map_out.empty() ? c.truth_out : map_out).c_str());
+    return 1;
+  }
+  if (!svg_out.empty()) {
+    std::string error;
+    const auto world_json = ParseJsonText(ReadText(c.world_path), &error);
+    if (!WriteFileReplacing(svg_out, RenderMapSvg(result, truth, world_json.value_or(nlohmann::json())))) {
+      std::fprintf(stderr, "irslam-sim: cannot write %s\n", svg_out.c_str());
+      return 1;
+    }
+  }
+  std::fprintf(stderr,
+               "irslam-sim: baseline bounce: %.1f s robot time, covered %.2f of %.2f m2 reachable (%.1f %%, true), "
+               "%.1f m path, %llu collisions\n",
+               max_time, cov.covered_m2, cov.reachable_m2, 100 * cov.fraction, cov.path_m,
+               static_cast<unsigned long long>(sim->collisions()));
+  return 0;
+}
+
 int Serve(const Common& c, const std::string& iface, double time_scale) {
   World world;
   robot::CoreOptions core_opts;
@@ -428,6 +479,11 @@ int main(int argc, char** argv) {
                   "What the work per control period is measured in: wall (the monotonic clock) or cpu "
                   "(this thread's CPU time: without the time a loaded host gave to others)")
       ->check(CLI::IsMember({"wall", "cpu"}));
+  std::string baseline;
+  run->add_option("--baseline", baseline,
+                  "bounce: drive the random-bounce cleaner (no map, no plan) instead of the mission, for "
+                  "--max-time (default: cleaning.max_time_s), and print its true coverage")
+      ->check(CLI::IsMember({"bounce"}));
 
   auto* serve = app.add_subcommand("serve", "Be the motor controller on a CAN bus");
   add_common(serve);
@@ -448,6 +504,7 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
   if (*generate) return irslam::sim::Generate(gen_seed, profile, gen_out);
+  if (*run && !baseline.empty()) return irslam::sim::RunBounceBaseline(common, max_time, map_out, svg_out);
   if (*run) return irslam::sim::Run(common, max_time, map_out, svg_out, lines_out, events_out, tick_clock);
   return irslam::sim::Serve(common, iface, time_scale);
 }

@@ -229,11 +229,12 @@ PlacedLine Place(const RelocalizeOptions& options, const Rigid& t, const LocalLi
 // The intervals (along the line) of a placed local line lying on saved lines,
 // merged; returns their total length.
 double Explained(const RelocalizeOptions& options, const SavedMap& saved, const AxisSegment& s,
-                 std::vector<std::pair<double, double>>* intervals) {
+                 std::vector<std::pair<double, double>>* intervals, double min_saved_m = 0) {
   intervals->clear();
   if (s.dir < 0) return 0;
   for (const AxisSegment& m : saved.segments) {
     if (m.dir != s.dir || std::abs(m.offset - s.offset) > options.line_tolerance_m) continue;
+    if (m.hi - m.lo < min_saved_m) continue;
     if (!SidesAgree(m.side, s.side)) continue;
     const double lo = std::max(s.lo, m.lo - kEndSlackM), hi = std::min(s.hi, m.hi + kEndSlackM);
     if (hi > lo) intervals->emplace_back(lo, hi);
@@ -286,6 +287,11 @@ PoseHypothesis Score(const RelocalizeOptions& options, const SavedMap& saved,
   const double margin2 = options.free_margin_m * options.free_margin_m;
   for (const LocalLine& l : local.lines) {
     const PlacedLine p = Place(options, rigid, l);
+    if (p.seg.dir >= 0) {
+      // On saved lines long enough to be walls (furniture moves, walls do not).
+      h.anchored_m[static_cast<size_t>(p.seg.dir)] +=
+          Explained(options, saved, p.seg, &intervals, options.anchor_line_m);
+    }
     h.explained_m += Explained(options, saved, p.seg, &intervals);
     // The unexplained rest: a conflict where it lies in the saved free space.
     const int n = std::max(1, static_cast<int>(std::ceil(l.length / kSampleStepM)));
@@ -441,6 +447,9 @@ options::Table<RelocalizeOptions> RelocalizeKeys() {
        "the committed hypothesis explains at least this fraction ..."},
       {"commit_margin", &R::commit_margin, 0, 2, "",
        "... and this much more than the runner-up ..."},
+      {"anchor_line_m", &R::anchor_line_m, 0, 100, "m",
+       "saved lines at least this long (walls) must pin the committed pose on each axis ..."},
+      {"min_anchor_m", &R::min_anchor_m, 0, 100, "m", "... with at least this much evidence on them per axis"},
       {"margin_evidence_m", &R::margin_evidence_m, 0.1, 1000, "m",
        "... over at most this much evidence (then a fixed length: not diluted by a long walk)"},
       {"distinct_m", &R::distinct_m, 0.01, 10, "m",
@@ -603,6 +612,9 @@ std::optional<PoseHypothesis> Relocalizer::Decision() const {
   const double needed_m =
       options_.commit_margin * std::min(evidence_m_, options_.margin_evidence_m);
   if (best.score < options_.commit_score || beats_m < needed_m) return std::nullopt;
+  // Both axes pinned by wall-length saved lines: a piece of furniture moved
+  // since the map was made cannot shift the pose by its move.
+  if (std::min(best.anchored_m[0], best.anchored_m[1]) < options_.min_anchor_m) return std::nullopt;
   return best;
 }
 

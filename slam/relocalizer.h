@@ -83,6 +83,12 @@ struct RelocalizeOptions {
   double min_direction_m = 0.5;       // evidence needed in each of the two directions to commit
   double free_margin_m = 0.3;         // saved free space: farther than this from all saved lines
   double crossing_conflict_m = 0.5;   // conflict per saved line the local trajectory crosses
+  // Walls do not move, furniture does: the committed hypothesis must have at
+  // least min_anchor_m of evidence on saved lines at least anchor_line_m long
+  // along each axis (else a piece moved since the map was made could shift the
+  // pose by its move).
+  double anchor_line_m = 1.0;
+  double min_anchor_m = 0.4;
 };
 options::Table<RelocalizeOptions> RelocalizeKeys();  // [relocalize]
 
@@ -91,6 +97,9 @@ struct PoseHypothesis {
   double score = 0;        // explained_m - conflict_m, over the evidence length: <= 1
   double explained_m = 0;  // evidence length lying on saved lines
   double conflict_m = 0;   // evidence contradicting the saved map
+  // Evidence lying on saved lines at least anchor_line_m long, per saved axis
+  // (lines along it): what pins the pose on each axis.
+  std::array<double, 2> anchored_m{};
 };
 
 // The local SLAM's lines and trajectory (its internal frame) scored against a

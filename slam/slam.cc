@@ -3,8 +3,9 @@
 // views at the top (map_lines, map_trajectory, ToMap: ~50 lines) and the key tables
 // at the bottom (~45 lines), the rest is one algorithm over one private state —
 // the window of scans, the EKF's pose and line rows, the end points — as
-// Associate (paper section 4: gating, the constrained update, collinear
-// insertion) calling InsertLine, ExtendEndpoints, ReprojectEndpoints and
+// Associate (paper section 4: NearestLine, eq. (13); InsertCollinearPiece,
+// eqs. (14)-(15); UpdateMatched with MatchRows and PassesGate, eq. (10) and the
+// innovation gate) calling InsertLine, ExtendEndpoints, ReprojectEndpoints and
 // MergeOverlapping (section 4.5). Those are private members that read and
 // rewrite the same rows and index map; split across files they would be one
 // class's internals in two places with no interface between them, which reads
@@ -110,9 +111,43 @@ void Slam::AdoptMap(const Pose2& local_to_map, const std::vector<LineFeature>& s
       Eigen::Vector3d(ro.pose_sigma_m * ro.pose_sigma_m, ro.pose_sigma_m * ro.pose_sigma_m,
                       ro.pose_sigma_rad * ro.pose_sigma_rad)
           .asDiagonal();
+  // Local lines the saved map does not have (a piece of furniture moved or
+  // new, seen while relocalising) are kept, as new lines after the saved ones:
+  // the model then knows them before any work is planned.
+  std::vector<LineFeature> kept = saved_lines;
+  for (LineFeature l : lines_) {
+    l.p0 = Transform(local_to_map, l.p0);
+    l.p1 = Transform(local_to_map, l.p1);
+    l.theta = NormalizeAngle(l.theta + local_to_map.theta);
+    l.rho += Normal(l.theta).dot(Eigen::Vector2d(local_to_map.x, local_to_map.y));
+    if (l.rho < 0) {
+      l.rho = -l.rho;
+      l.theta = NormalizeAngle(l.theta + M_PI);
+    }
+    const bool known = std::any_of(saved_lines.begin(), saved_lines.end(), [&](const LineFeature& m) {
+      const double dt = std::abs(NormalizeAngle(l.theta - m.theta));
+      const Eigen::Vector2d d = Direction(m.theta);
+      const double lo = std::min(d.dot(m.p0), d.dot(m.p1)), hi = std::max(d.dot(m.p0), d.dot(m.p1));
+      const double a = std::min(d.dot(l.p0), d.dot(l.p1)), b = std::max(d.dot(l.p0), d.dot(l.p1));
+      return dt < ro.known_angle_rad && std::abs(l.rho - m.rho) < ro.known_offset_m &&
+             std::min(hi, b) - std::max(lo, a) > -ro.known_offset_m;
+    });
+    if (known) continue;
+    l.collinear_with = 0;
+    l.id = 0;  // numbered below, after the saved ones
+    kept.push_back(l);
+    Eigen::Matrix2d c = l.cov;
+    c(0, 0) = std::max(c(0, 0), floor(0, 0));
+    c(1, 1) = std::max(c(1, 1), floor(1, 1));
+    state.push_back({l.rho, l.theta, c});
+  }
   ekf_.Restart(Compose(local_to_map, ekf_.pose()), pose_cov, state);
-  lines_ = saved_lines;
+  lines_ = std::move(kept);
   next_id_ = 1;
+  for (const auto& l : lines_) next_id_ = std::max(next_id_, l.id + 1);
+  for (auto& l : lines_) {
+    if (l.id == 0) l.id = next_id_++;
+  }
   for (size_t i = 0; i < lines_.size(); ++i) {
     // The state's normalised (rho >= 0) form; the endpoints are the saved ones.
     lines_[i].rho = ekf_.rho(static_cast<int>(i));
@@ -136,6 +171,19 @@ void Slam::ForgetMap() {
   trajectory_.clear();
   gate_rejections_in_a_row_ = 0;
   saved_frame_ = false;
+}
+
+void Slam::RemoveLines(const std::vector<int>& ids) {
+  for (int id : ids) {
+    const int i = IndexOf(id);
+    // Line 0 fixes the map frame's rotation when it is not a saved one: kept.
+    if (i < 0 || (i == 0 && !saved_frame_)) continue;
+    ekf_.RemoveLine(i);
+    lines_.erase(lines_.begin() + i);
+  }
+  for (auto& l : lines_) {
+    if (std::find(ids.begin(), ids.end(), l.collinear_with) != ids.end()) l.collinear_with = 0;
+  }
 }
 
 int Slam::IndexOf(int id) const {
@@ -363,15 +411,29 @@ void Slam::Associate(const ExtractedLine& obs) {
     InsertLine(obs, -1);
     return;
   }
-  const auto& ao = options_.association;
   // Only lines parallel or orthogonal to the first wall are mapped.
-  if (std::abs(AngleModHalfPi(theta_m - ekf_.theta(0))) > ao.angle_tolerance_rad) {
+  if (std::abs(AngleModHalfPi(theta_m - ekf_.theta(0))) > options_.association.angle_tolerance_rad) {
     ++stats_.rejected_angle;
     return;
   }
+  double best_dr = 0;
+  const int best = NearestLine(rho_m, theta_m, &best_dr);
+  if (best < 0) {
+    InsertLine(obs, -1);
+    return;
+  }
+  if (Overlap(best, a, b) <= 0) {
+    InsertCollinearPiece(obs, best, best_dr);
+    return;
+  }
+  UpdateMatched(obs, best, pose);
+}
+
+int Slam::NearestLine(double rho_m, double theta_m, double* best_dr) const {
   // Eq. (13): the weighted Hough distance to every mapped line; keep the nearest.
+  const auto& ao = options_.association;
   int best = -1;
-  double best_dh = ao.max_dh, best_dr = 0;
+  double best_dh = ao.max_dh;
   for (int i = 0; i < ekf_.num_lines(); ++i) {
     double dr = rho_m - ekf_.rho(i);
     double dt = NormalizeAngle(theta_m - ekf_.theta(i));
@@ -382,75 +444,88 @@ void Slam::Associate(const ExtractedLine& obs) {
     const double dh = ao.weight_rho * dr * dr + ao.weight_theta * dt * dt;
     if (dh < best_dh) {
       best_dh = dh;
-      best_dr = dr;
+      *best_dr = dr;
       best = i;
     }
   }
-  if (best < 0) {
+  return best;
+}
+
+void Slam::InsertCollinearPiece(const ExtractedLine& obs, int best, double best_dr) {
+  // Eqs. (14)-(15): collinear with a mapped line but not overlapping it: another
+  // piece of the same wall (furniture in between), tied to it by eq. (12). The
+  // tie is exact, and within epsilon_DH lie also the faces of two pieces of
+  // furniture a few cm out of line: tying those would pull both (and the
+  // robot) onto one line. So the tie is made only to a long line (a wall, not
+  // a face of furniture) and when the offsets agree closely.
+  const auto& ao = options_.association;
+  const LineFeature& partner = lines_[static_cast<size_t>(best)];
+  if (std::abs(best_dr) > ao.collinear_max_m || (partner.p1 - partner.p0).norm() < ao.collinear_min_length_m) {
+    ++stats_.collinear_declined;
     InsertLine(obs, -1);
     return;
   }
-  if (Overlap(best, a, b) <= 0) {
-    // Eqs. (14)-(15): collinear with a mapped line but not overlapping it: another
-    // piece of the same wall (furniture in between), tied to it by eq. (12). The
-    // tie is exact, and within epsilon_DH lie also the faces of two pieces of
-    // furniture a few cm out of line: tying those would pull both (and the
-    // robot) onto one line. So the tie is made only to a long line (a wall, not
-    // a face of furniture) and when the offsets agree closely.
-    const LineFeature& partner = lines_[static_cast<size_t>(best)];
-    if (std::abs(best_dr) > ao.collinear_max_m ||
-        (partner.p1 - partner.p0).norm() < ao.collinear_min_length_m) {
-      ++stats_.collinear_declined;
-      InsertLine(obs, -1);
-      return;
-    }
-    ++stats_.collinear_insertions;
-    InsertLine(obs, best);
-    return;
-  }
-  // Matched: eq. (10) with the constraints of this line, in one update.
+  ++stats_.collinear_insertions;
+  InsertLine(obs, best);
+}
+
+void Slam::MatchRows(const Pose2& pose, int best, const ExtractedLine& obs, std::vector<Eigen::RowVectorXd>* rows,
+                     std::vector<double>* y) const {
+  // Eq. (10): the measurement model of the matched line and its Jacobian in the
+  // robot's and the line's columns; the innovation with the angle wrapped.
   Eigen::Matrix<double, 2, 5> j;
   const LineObservation zhat = PredictObservation(pose, ekf_.rho(best), ekf_.theta(best), &j);
   const long n = ekf_.x().size();
-  std::vector<Eigen::RowVectorXd> rows;
-  std::vector<double> y, r;
-  double r_scale = 1;  // > 1 only for a gate recovery
   for (int k = 0; k < 2; ++k) {
     Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(n);
     row.head<3>() = j.row(k).head<3>();
     row(LineEkf::RhoIndex(best)) = j(k, 3);
     row(LineEkf::ThetaIndex(best)) = j(k, 4);
-    rows.push_back(row);
+    rows->push_back(row);
   }
-  y.push_back(obs.rho - zhat.rho);
-  y.push_back(NormalizeAngle(obs.theta - zhat.theta));
-  {
-    // Innovation gate: a DH match that the covariance cannot explain is not used
-    // (a wrong association would pull the whole map).
-    Eigen::MatrixXd hm(2, n);
-    hm.row(0) = rows[0];
-    hm.row(1) = rows[1];
-    // H P H' from H's non-zero columns (not a pass over the whole of P).
-    const Eigen::Matrix2d s = ekf_.ProjectedCov(hm) + obs.cov * ao.measurement_cov_scale;
-    const Eigen::Vector2d yy(y[0], y[1]);
-    const double d2 = yy.dot(s.inverse() * yy);
-    if (d2 > ao.max_mahalanobis2) {
-      ++stats_.rejected_gate;
-      if (ao.gate_recovery_after <= 0 || ++gate_rejections_in_a_row_ < ao.gate_recovery_after) return;
-      // Locked out: use it with R scaled so that it sits on the gate.
-      gate_rejections_in_a_row_ = 0;
-      ++stats_.gate_recoveries;
-      r_scale = d2 / ao.max_mahalanobis2;
-    } else {
-      gate_rejections_in_a_row_ = 0;
-    }
+  y->push_back(obs.rho - zhat.rho);
+  y->push_back(NormalizeAngle(obs.theta - zhat.theta));
+}
+
+bool Slam::PassesGate(const std::vector<Eigen::RowVectorXd>& rows, const std::vector<double>& y,
+                      const ExtractedLine& obs, double* r_scale) {
+  // Innovation gate: a DH match that the covariance cannot explain is not used
+  // (a wrong association would pull the whole map).
+  const auto& ao = options_.association;
+  Eigen::MatrixXd hm(2, ekf_.x().size());
+  hm.row(0) = rows[0];
+  hm.row(1) = rows[1];
+  // H P H' from H's non-zero columns (not a pass over the whole of P).
+  const Eigen::Matrix2d s = ekf_.ProjectedCov(hm) + obs.cov * ao.measurement_cov_scale;
+  const Eigen::Vector2d yy(y[0], y[1]);
+  const double d2 = yy.dot(s.inverse() * yy);
+  if (d2 <= ao.max_mahalanobis2) {
+    gate_rejections_in_a_row_ = 0;
+    return true;
   }
+  ++stats_.rejected_gate;
+  if (ao.gate_recovery_after <= 0 || ++gate_rejections_in_a_row_ < ao.gate_recovery_after) return false;
+  // Locked out: use it with R scaled so that it sits on the gate.
+  gate_rejections_in_a_row_ = 0;
+  ++stats_.gate_recoveries;
+  *r_scale = d2 / ao.max_mahalanobis2;
+  return true;
+}
+
+void Slam::UpdateMatched(const ExtractedLine& obs, int best, const Pose2& pose) {
+  // Matched: eq. (10) with the constraints of this line, in one update.
+  std::vector<Eigen::RowVectorXd> rows;
+  std::vector<double> y, r;
+  MatchRows(pose, best, obs, &rows, &y);
+  double r_scale = 1;  // > 1 only for a gate recovery
+  if (!PassesGate(rows, y, obs, &r_scale)) return;
   AppendConstraintRows(best, &rows, &y, &r);
+  const long n = ekf_.x().size();
   const long m = static_cast<long>(rows.size());
   Eigen::MatrixXd h(m, n);
   Eigen::VectorXd yy(m);
   Eigen::MatrixXd rr = Eigen::MatrixXd::Zero(m, m);
-  rr.topLeftCorner<2, 2>() = obs.cov * (ao.measurement_cov_scale * r_scale);
+  rr.topLeftCorner<2, 2>() = obs.cov * (options_.association.measurement_cov_scale * r_scale);
   for (long k = 0; k < m; ++k) {
     h.row(k) = rows[static_cast<size_t>(k)];
     yy(k) = y[static_cast<size_t>(k)];
@@ -541,6 +616,9 @@ options::Table<ResumeOptions> ResumeKeys() {
       {"line_sigma_rho_m", &R::line_sigma_rho_m, 0, 1, "m",
        "a saved line's rho keeps at least this uncertainty when a mission continues in its map"},
       {"line_sigma_theta_rad", &R::line_sigma_theta_rad, 0, 1, "rad", "... and its theta this"},
+      {"known_offset_m", &R::known_offset_m, 0, 2, "m",
+       "a line seen while relocalising is a saved one if within this offset (and angle) and overlapping ..."},
+      {"known_angle_rad", &R::known_angle_rad, 0, 1, "rad", "... else it is kept as a new line"},
   };
   return kKeys;
 }

@@ -84,6 +84,10 @@ struct ResumeOptions {
   double pose_sigma_rad = 0.02;
   double line_sigma_rho_m = 0.005;
   double line_sigma_theta_rad = 0.005;
+  // A local line (seen while relocalising) is one of the saved map's when a
+  // saved line is within these of it and overlaps it; else it is kept as new.
+  double known_offset_m = 0.1;
+  double known_angle_rad = 0.1;
 };
 options::Table<ResumeOptions> ResumeKeys();  // [slam.resume]
 
@@ -173,14 +177,17 @@ class Slam {
   // the EKF's lines are replaced by the saved ones (map frame, ids kept, the
   // next new line numbered after them), the pose is carried over by the
   // transform with the [slam.resume] uncertainty, the trajectory so far is
-  // transformed, and the calibration is kept. The local lines are dropped: they
-  // are the saved lines seen again (those that are not come back as new lines
-  // when seen again).
+  // transformed, and the calibration is kept. The local lines that are saved
+  // lines seen again are dropped; the others (furniture moved or new) are
+  // kept as new lines, numbered after the saved ones.
   void AdoptMap(const Pose2& local_to_map, const std::vector<LineFeature>& saved_lines);
   // Starts a new local map where the robot is (issue 14: the map disagreed and
   // the robot relocalises again): the lines and the trajectory are dropped, the
   // pose and the odometry (its distance too) go on, the frame is its own again.
   void ForgetMap();
+  // Takes lines out of the map (issue 14: the sides of furniture that has moved
+  // since the saved map), with their rows of the EKF state; ties to them are cut.
+  void RemoveLines(const std::vector<int>& ids);
   bool in_saved_map() const { return saved_frame_; }
 
   // Feeds one window's extracted lines (robot frame) to the map; public so tests
@@ -193,6 +200,17 @@ class Slam {
   Pose2 OdometryAt(double t) const;
   void CloseWindow();
   void Associate(const ExtractedLine& obs);
+  // The pieces of Associate: the nearest mapped line by eq. (13) (-1: none
+  // within epsilon_DH); a collinear piece, eqs. (14)-(15); a match, eq. (10),
+  // its rows and innovation, its gate (false: not used; *r_scale > 1 for a gate
+  // recovery).
+  int NearestLine(double rho_m, double theta_m, double* best_dr) const;
+  void InsertCollinearPiece(const ExtractedLine& obs, int best, double best_dr);
+  void UpdateMatched(const ExtractedLine& obs, int best, const Pose2& pose);
+  void MatchRows(const Pose2& pose, int best, const ExtractedLine& obs, std::vector<Eigen::RowVectorXd>* rows,
+                 std::vector<double>* y) const;
+  bool PassesGate(const std::vector<Eigen::RowVectorXd>& rows, const std::vector<double>& y,
+                  const ExtractedLine& obs, double* r_scale);
   int InsertLine(const ExtractedLine& obs, int collinear_with_index);
   void ApplyConstraintsOnly(int index);
   void AppendConstraintRows(int index, std::vector<Eigen::RowVectorXd>* h,

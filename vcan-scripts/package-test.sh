@@ -16,7 +16,8 @@ for f in /usr/bin/irslamd /usr/bin/irslamctl /usr/bin/irslam-candump /usr/bin/ir
          /usr/share/man/man8/irslamd.8.gz /usr/share/man/man1/irslamctl.1.gz \
          /usr/share/man/man1/irslam-sim.1.gz /usr/share/man/man1/irslam-candump.1.gz \
          /usr/share/man/man1/irslam-replay.1.gz /usr/share/bash-completion/completions/irslam-replay \
-         /usr/share/bash-completion/completions/irslamctl /usr/share/doc/irslam/copyright; do
+         /usr/share/bash-completion/completions/irslamctl /usr/share/bash-completion/completions/irslam-sim \
+         /usr/share/doc/irslam/copyright; do
   dpkg -L irslam | grep -qx "$f" || fail "$f is not in the package"
   [ -e "$f" ] || fail "$f was not installed"
 done

@@ -77,8 +77,13 @@ RelocResult Relocalise(const sim::World& world, const Made& made, const Pose2& s
   w.start = start;
   RelocResult r;
   std::optional<slam::SlamStats> s0;
+  std::string last_reason;
   const auto on_tick = [&](const sim::InProcessRun& run) {
     if (!s0 && run.core->state() == control::MissionState::kClean) s0 = run.core->slam().stats();
+    if (std::getenv("RELOC_TRACE") && run.core->Status(run.t).mission.reason != last_reason) {
+      last_reason = run.core->Status(run.t).mission.reason;
+      std::printf("    %.1f %s: %s\n", run.t, control::ToString(run.core->state()), last_reason.c_str());
+    }
     const auto st = run.core->Status(run.t);
     if (!st.relocalize || !st.relocalize->committed || !run.core->slam().in_saved_map()) return;
     const Pose2 est = Compose(made.world_from_map, run.core->slam().map_pose());
@@ -154,10 +159,79 @@ TEST(RelocTest, Fig14FromRandomPosesCommitsRightKeepsIdsAndFinishes) {
   EXPECT_GE(right, runs - 1);
 }
 
+TEST(RelocTest, FurnitureMovedHalfAMetreIsDetectedAndKeepsItsId) {
+  const sim::World world = testing::LoadTestWorld("fig14");
+  const Made made = MakeMap(world, 1);
+  for (const auto& o : world.objects)
+    std::printf("world object [%.2f %.2f %.2f %.2f]\n", o.xmin, o.ymin, o.xmax, o.ymax);
+  for (const auto& o : made.map.objects)
+    std::printf("map object %d [%.2f %.2f %.2f %.2f] %s\n", o.id, o.box.xmin, o.box.ymin, o.box.xmax, o.box.ymax,
+                control::ToString(o.kind));
+  const int which = std::getenv("RELOC_MOVE") ? std::atoi(std::getenv("RELOC_MOVE")) : 0;
+  const double dx = std::getenv("RELOC_DX") ? std::atof(std::getenv("RELOC_DX")) : 0.5;
+  const double dy = std::getenv("RELOC_DY") ? std::atof(std::getenv("RELOC_DY")) : 0.0;
+  sim::World moved = world;
+  moved.objects[static_cast<size_t>(which)].xmin += dx;
+  moved.objects[static_cast<size_t>(which)].xmax += dx;
+  moved.objects[static_cast<size_t>(which)].ymin += dy;
+  moved.objects[static_cast<size_t>(which)].ymax += dy;
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 3; ++i) {
+    const Pose2 start = RandomFreePose(moved, &rng);
+    const RelocResult r = Relocalise(moved, made, start, 30 + i, 1500, true);
+    std::printf("moved run %d: committed %d err %.3f attempts %d, end %s (%s)\n", i, r.committed, r.err_at_commit_m, r.attempts,
+                control::ToString(r.end), r.reason.c_str());
+    for (const auto& o : r.map.objects)
+      std::printf("  object %d [%.2f %.2f %.2f %.2f] %s %s\n", o.id, o.box.xmin, o.box.ymin, o.box.xmax, o.box.ymax,
+                  o.complete ? "complete" : "incomplete", o.note.c_str());
+  }
+}
+
 }  // namespace
 }  // namespace irslam
 namespace irslam {
+TEST(RelocDebug, Sweep) {
+  const char* worlds = std::getenv("RELOC_WORLDS");
+  if (!worlds) GTEST_SKIP();
+  const int runs = std::atoi(std::getenv("RELOC_RUNS") ? std::getenv("RELOC_RUNS") : "10");
+  std::string list = worlds;
+  size_t pos = 0;
+  while (pos <= list.size()) {
+    const size_t end = std::min(list.find(',', pos), list.size());
+    const std::string name = list.substr(pos, end - pos);
+    pos = end + 1;
+    const sim::World world = testing::LoadTestWorld(name);
+    const Made made = MakeMap(world, 1);
+    std::mt19937_64 rng(99);
+    int right = 0, wrong = 0, none = 0;
+    std::vector<double> times;
+    double worst_after = 0, worst_after_deg = 0;
+    for (int i = 0; i < runs; ++i) {
+      const Pose2 start = RandomFreePose(world, &rng);
+      const RelocResult r = Relocalise(world, made, start, 100 + i, 1500, true);
+      if (!r.committed) { ++none; std::printf("  %s run %d: no commit (%s)\n", name.c_str(), i, r.reason.c_str()); continue; }
+      if (r.err_at_commit_m > 0.2 || r.err_at_commit_rad > 10 * M_PI / 180) {
+        ++wrong;
+        std::printf("  %s run %d: WRONG %.2f m %.1f deg attempts %d end %s\n", name.c_str(), i, r.err_at_commit_m,
+                    r.err_at_commit_rad * 180 / M_PI, r.attempts, r.reason.c_str());
+        continue;
+      }
+      ++right;
+      times.push_back(r.commit_t);
+      worst_after = std::max(worst_after, r.max_err_after_m);
+      worst_after_deg = std::max(worst_after_deg, r.max_err_after_rad * 180 / M_PI);
+      if (r.attempts > 1 || r.end != control::MissionState::kDone)
+        std::printf("  %s run %d: attempts %d end %s (%s)\n", name.c_str(), i, r.attempts, control::ToString(r.end), r.reason.c_str());
+    }
+    std::sort(times.begin(), times.end());
+    std::printf("%s: right %d wrong %d none %d; t median %.1f max %.1f; worst after %.3f m %.2f deg\n", name.c_str(),
+                right, wrong, none, times.empty() ? 0 : times[times.size() / 2], times.empty() ? 0 : times.back(),
+                worst_after, worst_after_deg);
+  }
+}
+
 TEST(RelocDebug, NormalCleanInsertions) {
+  if (!std::getenv("RELOC_DEBUG")) GTEST_SKIP();
   const sim::World world = testing::LoadTestWorld("fig14");
   robot::CoreOptions options = robot::DefaultCoreOptions();
   options.mission.mode = "clean";

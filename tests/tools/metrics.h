@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "slam/slam.h"
+#include "sim/coverage.h"
 #include "sim/world.h"
 
 namespace irslam::metrics {
@@ -81,20 +82,10 @@ struct ObjectScores {
 ObjectScores ScoreObjects(const nlohmann::json& map, const slam::Slam& slam, const sim::World& world,
                           double impassable_gap_m);
 
-// Cleaning coverage against the truth (issue 13). The reachable floor: the free
-// floor (room minus furniture) the robot's body disc can reach from the start,
-// rasterised at cell_m (world frame); covered: swept by the true body disc
-// (radius_m) at the truth's poses with t0 <= t <= t1. curve (optional): the
-// covered fraction every sample_s from t0.
-struct CoverageScore {
-  double reachable_m2 = 0;
-  double covered_m2 = 0;
-  double fraction = 0;
-  double path_m = 0;  // true distance driven between t0 and t1
-};
-CoverageScore ScoreCoverage(const sim::World& world, double radius_m, const std::vector<TimedPose>& truth,
-                            double t0, double t1, double cell_m = 0.02,
-                            std::vector<std::pair<double, double>>* curve = nullptr, double sample_s = 10);
+// Cleaning coverage against the truth (issue 13): sim/coverage.h, shared with
+// irslam-sim run --baseline bounce.
+using sim::CoverageScore;
+using sim::ScoreCoverage;
 
 }  // namespace irslam::metrics
 

@@ -535,7 +535,7 @@ TEST(RelocalizerTest, NoEvidenceNoHypotheses) {
 
 TEST(RelocalizerTest, KeysHaveTheirDefaultsWithinBounds) {
   const RelocalizeOptions defaults;
-  EXPECT_EQ(RelocalizeKeys().size(), 15u);
+  EXPECT_EQ(RelocalizeKeys().size(), 17u);
   for (const auto& key : RelocalizeKeys()) {
     SCOPED_TRACE(std::string(key.name));
     EXPECT_FALSE(key.doc.empty());

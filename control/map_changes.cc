@@ -1,0 +1,99 @@
+#include "control/map_changes.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace irslam::control {
+
+options::Table<MapChangeOptions> MapChangeKeys() {
+  using O = MapChangeOptions;
+  static constexpr options::Key<O> kKeys[] = {
+      {"view_min_m", &O::view_min_m, 0, 2, "m",
+       "a saved object's side is in view from this distance (moved-furniture check) ..."},
+      {"view_max_m", &O::view_max_m, 0.05, 2, "m", "... up to this"},
+      {"view_bearing_rad", &O::view_bearing_rad, 0.1, 3.15, "rad", "... and within this of the heading"},
+      {"bin_m", &O::bin_m, 0.01, 1, "m", "a side's length is marked as passed in bins of this"},
+      {"seen_fraction", &O::seen_fraction, 0.1, 1, "",
+       "a side passed in view along this share of its length should have been seen again"},
+      {"min_side_m", &O::min_side_m, 0, 10, "m", "shorter sides are not watched"},
+      {"min_missing_sides", &O::min_missing_sides, 1, 4, "",
+       "an object with this many sides not seen again where they were has moved or gone"},
+  };
+  return kKeys;
+}
+
+void MapChanges::Reset(const std::vector<slam::LineFeature>& lines, const std::vector<TimedPose>& trajectory,
+                       const EnvironmentModel& model) {
+  sides_.clear();
+  reported_.clear();
+  const std::vector<room_geometry::Side> sides = room_geometry::ToSides(lines, trajectory, 0.12);
+  for (const auto& o : model.objects) {
+    for (int id : o.lines) {
+      const auto s = std::find_if(sides.begin(), sides.end(), [&](const auto& x) { return x.id == id; });
+      const auto l = std::find_if(lines.begin(), lines.end(), [&](const auto& x) { return x.id == id; });
+      if (s == sides.end() || l == lines.end() || s->seen_from == 0) continue;
+      if (s->a1 - s->a0 < options_.min_side_m) continue;
+      Watched w;
+      w.side = *s;
+      w.object = o.id;
+      w.observations = l->observations;
+      w.passed.assign(static_cast<size_t>(std::ceil((s->a1 - s->a0) / options_.bin_m)), false);
+      sides_.push_back(std::move(w));
+    }
+  }
+}
+
+bool MapChanges::SeenAgain(const Watched& w, const std::vector<slam::LineFeature>& lines) const {
+  const auto l = std::find_if(lines.begin(), lines.end(), [&](const auto& x) { return x.id == w.side.id; });
+  // Merged into another line (seen and joined): not missing.
+  return l == lines.end() || l->observations > w.observations;
+}
+
+std::vector<int> MapChanges::Step(const Pose2& me, const std::vector<slam::LineFeature>& lines) {
+  std::vector<int> moved;
+  for (auto& w : sides_) {
+    if (w.decided) continue;
+    const room_geometry::Side& s = w.side;
+    const double along = s.horizontal ? me.x : me.y;
+    const double across = s.horizontal ? me.y : me.x;
+    const double d = (across - s.c) * s.seen_from;  // > 0: on the side it was seen from
+    const bool in_view = d >= options_.view_min_m && d <= options_.view_max_m && along >= s.a0 && along <= s.a1;
+    if (in_view) {
+      // Bearing of the side's foot point from the robot.
+      const double foot = s.horizontal ? (s.seen_from > 0 ? -M_PI / 2 : M_PI / 2)
+                                       : (s.seen_from > 0 ? M_PI : 0.0);
+      if (std::abs(NormalizeAngle(foot - me.theta)) <= options_.view_bearing_rad) {
+        const size_t bin = std::min(w.passed.size() - 1, static_cast<size_t>((along - s.a0) / options_.bin_m));
+        w.passed[bin] = true;
+      }
+      continue;  // judged once the robot has left it (the window with it closed)
+    }
+    const double share = static_cast<double>(std::count(w.passed.begin(), w.passed.end(), true)) /
+                         static_cast<double>(std::max<size_t>(1, w.passed.size()));
+    if (share < options_.seen_fraction) continue;
+    // Passed in view along most of its length and left behind: seen again or missing.
+    if (d > options_.view_max_m + 0.3 || d < 0 || along < s.a0 - 0.3 || along > s.a1 + 0.3) {
+      w.decided = true;
+      w.missing = !SeenAgain(w, lines);
+      if (!w.missing) continue;
+      int missing = 0;
+      for (const auto& o : sides_) missing += o.object == w.object && o.missing;
+      if (missing >= options_.min_missing_sides &&
+          std::find(reported_.begin(), reported_.end(), w.object) == reported_.end()) {
+        reported_.push_back(w.object);
+        moved.push_back(w.object);
+      }
+    }
+  }
+  return moved;
+}
+
+std::vector<int> MapChanges::StaleLinesOf(int object_id, const std::vector<slam::LineFeature>& lines) const {
+  std::vector<int> out;
+  for (const auto& w : sides_) {
+    if (w.object == object_id && (w.missing || !SeenAgain(w, lines))) out.push_back(w.side.id);
+  }
+  return out;
+}
+
+}  // namespace irslam::control

@@ -1,0 +1,69 @@
+// Furniture that moved since the saved map was made (issue 14). After a
+// relocalisation (or a start in the live map), each side of a saved object is
+// watched: where the robot passes it in view (on the side it was seen from,
+// within the IR mapping range, the side ahead or beside the robot) its length
+// is marked, and a side passed in view along most of its length but never
+// matched again by the SLAM is missing. An object with enough missing sides
+// has moved (or gone): its lines leave the map, and the modeller is told, so
+// that the piece found elsewhere with the same size keeps its id with a note
+// (room_model.h Modeler::NoteMoved), rather than the map silently holding both.
+// Bounded work: O(watched sides) per period. Pure.
+#ifndef IRSLAM_CONTROL_MAP_CHANGES_H_
+#define IRSLAM_CONTROL_MAP_CHANGES_H_
+
+#include <vector>
+
+#include "control/room_geometry.h"
+#include "control/room_model.h"
+#include "slam/slam.h"
+#include "types/geometry.h"
+#include "types/options.h"
+
+namespace irslam::control {
+
+struct MapChangeOptions {
+  double view_min_m = 0.12;       // a side is in view from this perpendicular distance ...
+  double view_max_m = 0.55;       // ... up to this (well inside the mapping range)
+  double view_bearing_rad = 1.75; // ... and within this of the heading (the sensors look ahead and sideways)
+  double bin_m = 0.05;            // a side's length is marked in bins of this
+  double seen_fraction = 0.7;     // passed in view along this share: it should have been seen again
+  double min_side_m = 0.2;        // shorter sides are not watched
+  int min_missing_sides = 2;      // an object with this many sides missing has moved or gone
+};
+options::Table<MapChangeOptions> MapChangeKeys();  // [relocalize] too
+
+class MapChanges {
+ public:
+  explicit MapChanges(MapChangeOptions options) : options_(options) {}
+
+  // Watches the objects' sides of `model` (map frame lines and the trajectory
+  // they were seen from) from now on; nothing is watched after Clear.
+  void Reset(const std::vector<slam::LineFeature>& lines, const std::vector<TimedPose>& trajectory,
+             const EnvironmentModel& model);
+  void Clear() { sides_.clear(); }
+  // One period at map pose `me`; `lines` is the SLAM's map (map frame, ids).
+  // Returns the ids of objects found moved in this period (each object once).
+  std::vector<int> Step(const Pose2& me, const std::vector<slam::LineFeature>& lines);
+  // The line ids of moved object `id` to take out of the map: its sides not
+  // seen again (missing, or never passed); a side seen again stays.
+  std::vector<int> StaleLinesOf(int object_id, const std::vector<slam::LineFeature>& lines) const;
+
+ private:
+  struct Watched {
+    room_geometry::Side side;
+    int object = 0;
+    int observations = 0;  // the line's count when watching began
+    std::vector<bool> passed;
+    bool missing = false;
+    bool decided = false;  // seen again, or judged missing
+  };
+  bool SeenAgain(const Watched& w, const std::vector<slam::LineFeature>& lines) const;
+
+  MapChangeOptions options_;
+  std::vector<Watched> sides_;
+  std::vector<int> reported_;
+};
+
+}  // namespace irslam::control
+
+#endif  // IRSLAM_CONTROL_MAP_CHANGES_H_

@@ -1,0 +1,284 @@
+// Cleaning through the real processes (issue 13): irslam-sim serve + irslamd +
+// irslamctl on the loopback bus (vcan0 when IRSLAM_TEST_CAN=vcan0), time-scaled
+// (IRSLAM_TEST_TIME_SCALE, default 10). `irslamctl clean` maps the room, cleans
+// it and goes home; status shows the progress; the saved map (state dir) carries
+// the cells with their done flags, and a kill -9 during cleaning leaves it intact
+// with the cells finished before. Resuming after a restart needs relocalisation
+// (issue 14) and is not tested here.
+#include <signal.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "daemon/rpc_client.h"
+#include "io/json_text.h"
+#include "robot/robot_core.h"
+#include "sim/coverage.h"
+#include "sim/world.h"
+#include "tests/testing/process.h"
+
+namespace irslam {
+namespace {
+
+using testing::Process;
+using testing::RunCommand;
+using Clock = std::chrono::steady_clock;
+
+const std::string kBin = IRSLAM_BINARY_DIR;
+const std::string kSrc = IRSLAM_SOURCE_DIR;
+const double kScale = [] {
+  const char* e = std::getenv("IRSLAM_TEST_TIME_SCALE");
+  return e && *e ? std::atof(e) : 10.0;
+}();
+
+// A wall-time limit that was chosen for 10x: scaled to the time scale in use.
+double WallS(double seconds_at_10x) { return seconds_at_10x * 10.0 / kScale; }
+
+void Sleep(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
+
+std::optional<nlohmann::json> ReadJson(const std::string& path) {
+  std::string error;
+  return ParseJsonText(testing::ReadFile(path), &error);
+}
+
+int CellsDone(const nlohmann::json& cleaning) {
+  int n = 0;
+  for (const auto& c : cleaning.value("cells", nlohmann::json::array())) n += c.value("done", false);
+  return n;
+}
+
+class CleanE2eTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = testing::MakeTempDir();
+    const char* env = std::getenv("IRSLAM_TEST_CAN");
+    bus_ = env && *env ? env : "unix:" + dir_ + "/bus";
+    socket_ = dir_ + "/irslamd.sock";
+  }
+  void TearDown() override {
+    if (HasFailure()) {
+      std::fprintf(stderr, "--- sim log\n%s--- daemon log\n%s", testing::ReadFile(dir_ + "/sim.log").c_str(),
+                   testing::ReadFile(dir_ + "/daemon.log").c_str());
+    }
+    for (Process* p : {&daemon_, &sim_}) p->Signal(SIGKILL);
+    for (Process* p : {&daemon_, &sim_}) p->Wait(5);
+    std::filesystem::remove_all(dir_);
+  }
+
+  std::string MapFile() const { return dir_ + "/state/map.json"; }
+
+  // The simulator on world, and the daemon with the test rig's config (the
+  // controller-silence limit in wall time, as in e2e_test.cc; the state dir here).
+  void StartAll(const std::string& world) {
+    world_ = kSrc + "/tests/worlds/" + world;
+    const nlohmann::json config = {{"controller", {{"timeout_s", std::max(0.1, 0.1 * kScale)}}},
+                                   {"state", {{"dir", dir_ + "/state"}}}};
+    std::ofstream(dir_ + "/irslamd.conf") << config.dump(2) << "\n";
+    ASSERT_TRUE(sim_.Start({kBin + "/sim/irslam-sim", "serve", "--can", bus_, "--world", world_, "--time-scale",
+                            std::to_string(kScale), "--truth-out", dir_ + "/truth.json"},
+                           dir_ + "/sim.log"));
+    StartDaemon();
+  }
+
+  void StartDaemon() {
+    ASSERT_TRUE(daemon_.Start({kBin + "/daemon/irslamd", "--can", bus_, "--socket", socket_, "--time-scale",
+                               std::to_string(kScale), "--config", dir_ + "/irslamd.conf"},
+                              dir_ + "/daemon.log"));
+    for (int i = 0; i < 400; ++i) {
+      auto s = Status();
+      if (s && (*s)["controller"]["alive"] == true) return;
+      Sleep(0.05);
+    }
+    FAIL() << "daemon never answered or never saw the controller";
+  }
+
+  std::optional<nlohmann::json> Status() {
+    RpcClient c;
+    std::string error;
+    if (!c.Connect(socket_, &error)) return std::nullopt;
+    return c.Call("status", nlohmann::json::object(), 5, &error);
+  }
+
+  int Ctl(const std::vector<std::string>& args, std::string* out, double timeout_s = 30) {
+    std::vector<std::string> argv = {kBin + "/daemon/irslamctl", "--socket", socket_};
+    argv.insert(argv.end(), args.begin(), args.end());
+    return RunCommand(argv, out, timeout_s);
+  }
+
+  std::string dir_, bus_, socket_, world_;
+  Process sim_, daemon_;
+};
+
+// The floors below are a few points under what 3 runs at 10x measured (in the
+// comments), on fig17 (3 x 3 m, one cell: ~370 s of robot time, ~40 s wall).
+TEST_F(CleanE2eTest, CleanShowsGrowingProgressEndsDoneAndSavesTheCells) {
+  StartAll("fig17.json");
+  std::string out;
+  ASSERT_EQ(Ctl({"clean"}, &out), 0) << out;
+  EXPECT_EQ(out.rfind("state: ", 0), 0u) << out;
+  std::vector<double> fractions;  // status.cleaning.fraction while in state clean
+  bool saw_return_home = false;
+  nlohmann::json last;
+  const auto end = Clock::now() + std::chrono::duration<double>(WallS(120));
+  while (Clock::now() < end) {
+    auto s = Status();
+    ASSERT_TRUE(s);
+    last = *s;
+    const std::string state = (*s)["state"];
+    ASSERT_NE(state, "fault") << s->dump();
+    ASSERT_NE(state, "idle") << s->dump();
+    if (state == "clean") {
+      ASSERT_TRUE((*s)["cleaning"].is_object()) << s->dump();
+      EXPECT_EQ((*s)["cleaning"]["state"], "cleaning");
+      fractions.push_back((*s)["cleaning"]["fraction"]);
+    }
+    saw_return_home |= state == "return_home";
+    if (state == "done") break;
+    Sleep(0.25);
+  }
+  ASSERT_EQ(last["state"], "done") << last.dump();
+  EXPECT_TRUE(saw_return_home);
+  // Progress grows while cleaning (never back), from near nothing to most of the room.
+  ASSERT_GE(fractions.size(), 20u) << "cleaning lasted ~270 s of robot time: sampled every 0.25 s wall";
+  for (size_t i = 1; i < fractions.size(); ++i) EXPECT_GE(fractions[i], fractions[i - 1] - 1e-12) << i;
+  EXPECT_LT(fractions.front(), 0.2);
+  EXPECT_GT(fractions.back(), fractions.front() + 0.5);
+  const auto& cl = last["cleaning"];
+  EXPECT_EQ(cl["state"], "done");
+  EXPECT_EQ(cl["cells_done"], cl["cells_total"]);
+  EXPECT_GT(cl["fraction"].get<double>(), 0.96);  // estimated; measured 0.992-0.999 (4 runs)
+  ASSERT_EQ(Ctl({"status"}, &out), 0) << out;
+  EXPECT_NE(out.find("cleaning:   done, cells 1/1"), std::string::npos) << out;
+
+  // stop saves the map (deferred while the last cell's save is under 5 s old):
+  // the file carries the cleaning with its cells, all done.
+  ASSERT_EQ(Ctl({"stop"}, &out), 0) << out;
+  std::optional<nlohmann::json> file;
+  for (int i = 0; i < 100 && !(file && (*file)["reason"] == "stop"); ++i) {
+    Sleep(0.1);
+    file = ReadJson(MapFile());
+  }
+  ASSERT_TRUE(file) << testing::ReadFile(MapFile());
+  ASSERT_EQ((*file)["reason"], "stop");
+  const auto& saved = (*file)["map"]["cleaning"];
+  ASSERT_TRUE(saved.is_object()) << file->dump();
+  EXPECT_EQ(saved["state"], "done");
+  EXPECT_GT(saved["finished_t"].get<double>(), saved["swept_t"].get<double>());
+  ASSERT_GE(saved["cells"].size(), 1u);
+  for (const auto& c : saved["cells"]) {
+    EXPECT_EQ(c["done"], true);
+    EXPECT_GE(c["polygon"].size(), 3u);
+  }
+  EXPECT_GT(saved["fraction"].get<double>(), 0.96);
+
+  // Against the truth: the body's sweep of the reachable floor while cleaning.
+  sim_.Signal(SIGTERM);
+  ASSERT_EQ(sim_.Wait(10), 0);
+  const auto truth = ReadJson(dir_ + "/truth.json");
+  ASSERT_TRUE(truth);
+  std::string error;
+  const auto world = sim::LoadWorldFile(world_, &error);
+  ASSERT_TRUE(world) << error;
+  std::vector<TimedPose> traj;
+  for (const auto& p : (*truth)["trajectory"]) traj.push_back({p[0], {p[1], p[2], p[3]}});
+  const double t0 = saved["started_t"], t1 = saved["swept_t"];
+  const sim::CoverageScore cov = sim::ScoreCoverage(*world, robot::DefaultCoreOptions().slam.geometry.radius_m, traj, t0, t1);
+  std::fprintf(stderr, "clean_e2e: fig17 covered %.1f %% of %.2f m2 (true), %.1f %% estimated, %.0f s cleaning\n",
+               100 * cov.fraction, cov.reachable_m2, 100 * saved["fraction"].get<double>(), t1 - t0);
+  EXPECT_GT(cov.fraction, 0.87);  // measured 0.903-0.917 (3 runs; in process 0.903)
+  EXPECT_EQ((*truth)["collisions"], 0);
+}
+
+// fig14 (seven cells): kill -9 once two cells are done and saved. The file is
+// intact (the daemon's own check passes on restart) and keeps those cells done.
+TEST_F(CleanE2eTest, KillNineDuringCleaningKeepsTheSavedProgressIntact) {
+  StartAll("fig14.json");
+  std::string out;
+  ASSERT_EQ(Ctl({"start", "--mode", "clean"}, &out), 0) << out;
+  int saved_done = 0;
+  nlohmann::json saved_cleaning;
+  const auto end = Clock::now() + std::chrono::duration<double>(WallS(120));
+  while (Clock::now() < end && saved_done < 2) {
+    auto s = Status();
+    ASSERT_TRUE(s);
+    ASSERT_NE((*s)["state"], "fault") << s->dump();
+    ASSERT_NE((*s)["state"], "done") << "cleaning ended before two cells were saved";
+    if (const auto file = ReadJson(MapFile()); file && (*file)["map"]["cleaning"].is_object()) {
+      saved_cleaning = (*file)["map"]["cleaning"];
+      saved_done = CellsDone(saved_cleaning);
+    }
+    Sleep(0.2);
+  }
+  ASSERT_GE(saved_done, 2) << "no save with two finished cells; last saved: " << saved_cleaning.dump();
+  const auto before = ReadJson(MapFile());
+  ASSERT_TRUE(before);
+  daemon_.Signal(SIGKILL);
+  daemon_.Wait(5);
+
+  // The file parses, is the one written before the kill, and holds the progress.
+  const auto after = ReadJson(MapFile());
+  ASSERT_TRUE(after) << "torn map file";
+  EXPECT_EQ((*after)["seq"], (*before)["seq"]);
+  const auto& cl = (*after)["map"]["cleaning"];
+  std::fprintf(stderr, "clean_e2e: fig14 killed with %d of %zu cells saved done, %.2f m2 (%.1f %%) saved\n",
+               CellsDone(cl), cl["cells"].size(), cl["covered_m2"].get<double>(), 100 * cl["fraction"].get<double>());
+  EXPECT_EQ(cl["state"], "cleaning");
+  EXPECT_EQ(cl["cells"].size(), 7u);
+  EXPECT_GE(CellsDone(cl), 2);
+  EXPECT_GT(cl["covered_m2"].get<double>(), 4.0);  // two of seven cells of ~18.6 m2
+  EXPECT_GT(cl["fraction"].get<double>(), 0.2);
+  EXPECT_LT(cl["fraction"].get<double>(), 0.9);
+
+  // A restarted daemon accepts the file (checksum and all) and serves it.
+  StartDaemon();
+  ASSERT_EQ(Ctl({"map", "--out", dir_ + "/served.json"}, &out), 0) << out;
+  const auto served = ReadJson(dir_ + "/served.json");
+  ASSERT_TRUE(served);
+  EXPECT_EQ((*served)["saved"]["seq"], (*before)["seq"]) << served->dump().substr(0, 400);
+  EXPECT_EQ((*served)["cleaning"], (*after)["map"]["cleaning"]);
+}
+
+// irslam-sim run --baseline bounce: the random-bounce cleaner for the time
+// fig17's planned cleaning took (275 s, docs/cleaning.md), scored against the
+// truth. Deterministic for a seed: 26.1 % of 8.85 m2 (the docs' bounce column).
+TEST(BounceBaselineTest, SimRunBaselineBounceReportsItsTrueCoverage) {
+  const std::string dir = testing::MakeTempDir();
+  std::string out;
+  ASSERT_EQ(RunCommand({kBin + "/sim/irslam-sim", "run", "--world", kSrc + "/tests/worlds/fig17.json", "--baseline",
+                        "bounce", "--max-time", "275", "--seed", "1", "--map-out", dir + "/bounce.json", "--svg",
+                        dir + "/bounce.svg"},
+                       &out, 60),
+            0)
+      << out;
+  EXPECT_NE(out.find("irslam-sim: baseline bounce: 275.0 s robot time, covered "), std::string::npos) << out;
+  const auto result = ReadJson(dir + "/bounce.json");
+  ASSERT_TRUE(result);
+  EXPECT_EQ((*result)["baseline"], "bounce");
+  const auto& cl = (*result)["cleaning"];
+  EXPECT_NEAR(cl["total_m2"].get<double>(), 8.85, 0.05);  // fig17's reachable floor
+  EXPECT_GT(cl["fraction"].get<double>(), 0.20);
+  EXPECT_LT(cl["fraction"].get<double>(), 0.33);  // far below planned cleaning's ~90 %
+  EXPECT_NEAR(cl["covered_m2"].get<double>(), cl["fraction"].get<double>() * cl["total_m2"].get<double>(), 1e-9);
+  EXPECT_DOUBLE_EQ(cl["finished_t"].get<double>(), 275.0);
+  // The curve grows from nothing to the final fraction.
+  ASSERT_GE(cl["curve"].size(), 28u);
+  EXPECT_LT(cl["curve"][0][1].get<double>(), 0.05);
+  EXPECT_DOUBLE_EQ(cl["curve"].back()[1].get<double>(), cl["fraction"].get<double>());
+  EXPECT_NE(testing::ReadFile(dir + "/bounce.svg").find("<svg"), std::string::npos);
+  // Without --max-time: the cleaning budget (cleaning.max_time_s).
+  ASSERT_EQ(RunCommand({kBin + "/sim/irslam-sim", "run", "--world", kSrc + "/tests/worlds/fig17.json", "--baseline",
+                        "bounce"},
+                       &out, 60),
+            0)
+      << out;
+  EXPECT_NE(out.find("baseline bounce: 3600.0 s robot time"), std::string::npos) << out;
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace irslam
