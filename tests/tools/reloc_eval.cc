@@ -43,8 +43,9 @@ PoseError Max(const PoseError& a, const PoseError& b) {
   return {std::max(a.position_m, b.position_m), std::max(a.heading_rad, b.heading_rad)};
 }
 
-RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options, const robot::MapSnapshot& saved,
-                const Pose2& map_to_world, const Pose2& start, uint64_t seed, const RelocOptions& ro) {
+RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options,
+                const robot::MapSnapshot& saved, const Pose2& map_to_world, const Pose2& start,
+                uint64_t seed, const RelocOptions& ro) {
   RelocRun r;
   r.start = start;
   r.seed = seed;
@@ -92,8 +93,10 @@ RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options, const
   };
   robot::CoreOptions o = options;
   if (saved.calibration) o.slam.initial_calibration = saved.calibration;
-  const sim::InProcessRun run = sim::RunInProcess(world, o, seed, ro.max_time_s, on_tick, nullptr, nullptr, setup);
-  r.end_state = run.error.empty() ? control::ToString(run.core->state()) : "not started: " + run.error;
+  const sim::InProcessRun run =
+      sim::RunInProcess(world, o, seed, ro.max_time_s, on_tick, nullptr, nullptr, setup);
+  r.end_state =
+      run.error.empty() ? control::ToString(run.core->state()) : "not started: " + run.error;
   r.end_t = run.t;
   const robot::MapSnapshot out = run.core->Map();
   if (!r.committed && out.relocalized) {
@@ -113,7 +116,8 @@ RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options, const
 
 }  // namespace
 
-Pose2 FitRigid(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to, double* rms_m) {
+Pose2 FitRigid(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
+               double* rms_m) {
   const size_t n = std::min(from.size(), to.size());
   if (rms_m) *rms_m = 0;
   if (n < 2) return {};
@@ -143,12 +147,13 @@ Pose2 FitRigid(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen
   return {t.x(), t.y(), NormalizeAngle(theta)};
 }
 
-Pose2 MapToWorldFit(const std::vector<TimedPose>& map_traj, const std::vector<TimedPose>& truth, double* rms_m,
-                    double max_dt_s) {
+Pose2 MapToWorldFit(const std::vector<TimedPose>& map_traj, const std::vector<TimedPose>& truth,
+                    double* rms_m, double max_dt_s) {
   std::vector<Eigen::Vector2d> from, to;
   size_t j = 0;
   for (const TimedPose& m : map_traj) {
-    while (j + 1 < truth.size() && std::abs(truth[j + 1].t - m.t) <= std::abs(truth[j].t - m.t)) ++j;
+    while (j + 1 < truth.size() && std::abs(truth[j + 1].t - m.t) <= std::abs(truth[j].t - m.t))
+      ++j;
     if (truth.empty() || std::abs(truth[j].t - m.t) > max_dt_s) continue;
     from.emplace_back(m.pose.x, m.pose.y);
     to.emplace_back(truth[j].pose.x, truth[j].pose.y);
@@ -158,10 +163,12 @@ Pose2 MapToWorldFit(const std::vector<TimedPose>& map_traj, const std::vector<Ti
 
 PoseError ErrorInWorld(const Pose2& map_pose, const Pose2& map_to_world, const Pose2& truth) {
   const Pose2 w = Compose(map_to_world, map_pose);
-  return {std::hypot(w.x - truth.x, w.y - truth.y), std::abs(NormalizeAngle(w.theta - truth.theta))};
+  return {std::hypot(w.x - truth.x, w.y - truth.y),
+          std::abs(NormalizeAngle(w.theta - truth.theta))};
 }
 
-int KeptLineIds(const std::vector<slam::LineFeature>& saved, const std::vector<slam::LineFeature>& out) {
+int KeptLineIds(const std::vector<slam::LineFeature>& saved,
+                const std::vector<slam::LineFeature>& out) {
   std::set<int> ids;
   for (const auto& l : out) ids.insert(l.id);
   int kept = 0;
@@ -169,8 +176,8 @@ int KeptLineIds(const std::vector<slam::LineFeature>& saved, const std::vector<s
   return kept;
 }
 
-int DuplicateLines(const std::vector<slam::LineFeature>& saved, const std::vector<slam::LineFeature>& out,
-                   double dist_m, double angle_rad) {
+int DuplicateLines(const std::vector<slam::LineFeature>& saved,
+                   const std::vector<slam::LineFeature>& out, double dist_m, double angle_rad) {
   std::set<int> saved_ids;
   for (const auto& l : saved) saved_ids.insert(l.id);
   int duplicates = 0;
@@ -184,7 +191,8 @@ int DuplicateLines(const std::vector<slam::LineFeature>& saved, const std::vecto
       const double angle = std::acos(std::min(1.0, std::abs(d.dot(nd))));  // undirected
       if (angle > angle_rad) continue;
       const Eigen::Vector2d normal(-d.y(), d.x());
-      if (std::abs(normal.dot(n.p0 - s.p0)) > dist_m || std::abs(normal.dot(n.p1 - s.p0)) > dist_m) continue;
+      if (std::abs(normal.dot(n.p0 - s.p0)) > dist_m || std::abs(normal.dot(n.p1 - s.p0)) > dist_m)
+        continue;
       const double a = d.dot(n.p0 - s.p0), b = d.dot(n.p1 - s.p0);
       if (std::max(a, b) <= 0 || std::min(a, b) >= len) continue;  // beyond its ends
       ++duplicates;
@@ -194,7 +202,8 @@ int DuplicateLines(const std::vector<slam::LineFeature>& saved, const std::vecto
   return duplicates;
 }
 
-std::vector<Pose2> RandomFreeStarts(const sim::World& world, int n, double clearance_m, uint64_t seed) {
+std::vector<Pose2> RandomFreeStarts(const sim::World& world, int n, double clearance_m,
+                                    uint64_t seed) {
   std::mt19937_64 rng(seed);
   const sim::Box b = world.Bounds();
   std::uniform_real_distribution<double> ux(b.xmin, b.xmax), uy(b.ymin, b.ymax), uth(-M_PI, M_PI);
@@ -221,31 +230,43 @@ RelocWorld EvaluateRelocalization(const sim::World& world, const robot::CoreOpti
   const robot::MapSnapshot saved = first.core->Map();
   w.map_lines = static_cast<int>(saved.lines.size());
   w.map_objects = static_cast<int>(saved.objects.size());
-  w.map_to_world = MapToWorldFit(saved.trajectory, Poses(first.sim->Truth()["trajectory"]), &w.fit_rms_m);
+  w.map_to_world =
+      MapToWorldFit(saved.trajectory, Poses(first.sim->Truth()["trajectory"]), &w.fit_rms_m);
   const double clearance = options.slam.geometry.radius_m + ro.clearance_extra_m;
-  const std::vector<Pose2> starts = RandomFreeStarts(world, ro.runs, clearance, ro.seed * 7919 + 13);
+  const std::vector<Pose2> starts =
+      RandomFreeStarts(world, ro.runs, clearance, ro.seed * 7919 + 13);
   for (size_t i = 0; i < starts.size(); ++i) {
     w.runs.push_back(RunOne(world, explore, saved, w.map_to_world, starts[i], ro.seed + 1 + i, ro));
   }
   return w;
 }
 
-std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOptions& ro, const std::string& command) {
+std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOptions& ro,
+                          const std::string& command) {
   std::ostringstream md;
   md << "# Relocalisation in a saved map: results\n\n"
-     << "Generated by `" << command << "` (tests/tools/reloc_eval.h; docs/relocalization.md says how to read it). "
-     << "Per world: one exploration mission makes the map (seed " << ro.seed << "), then " << ro.runs
+     << "Generated by `" << command
+     << "` (tests/tools/reloc_eval.h; docs/relocalization.md says how to read it). "
+     << "Per world: one exploration mission makes the map (seed " << ro.seed << "), then "
+     << ro.runs
      << " runs from random free start poses (uniform in the room, at least the robot radius + "
-     << F(ro.clearance_extra_m * 100, 0) << " cm from walls and furniture, uniform heading) start from it, "
-     << "each up to " << F(ro.max_time_s, 0) << " s robot time and ending " << F(ro.after_commit_s, 0)
-     << " s after the commit. Errors are in the world frame through the least-squares fit of the first "
-        "mission's map trajectory onto its true trajectory (fit residual below). *Confidently wrong*: committed "
+     << F(ro.clearance_extra_m * 100, 0)
+     << " cm from walls and furniture, uniform heading) start from it, "
+     << "each up to " << F(ro.max_time_s, 0) << " s robot time and ending "
+     << F(ro.after_commit_s, 0)
+     << " s after the commit. Errors are in the world frame through the least-squares fit of the "
+        "first "
+        "mission's map trajectory onto its true trajectory (fit residual below). *Confidently "
+        "wrong*: committed "
         "more than "
      << F(ro.wrong_position_m * 100, 0) << " cm / " << F(ro.wrong_heading_rad * kDeg, 0)
      << "° off and not back within " << F(ro.recover_s, 0)
-     << " s, or still off when the run ended. *Correct*: committed, never confidently wrong, within those bounds at the end.\n\n";
-  md << "| world | map | fit rms cm | runs | committed | correct | confidently wrong | time to relocalise s median | "
-        "worst | error at commit cm median / max | heading at commit deg max | max error after (from commit + 5 s) "
+     << " s, or still off when the run ended. *Correct*: committed, never confidently wrong, "
+        "within those bounds at the end.\n\n";
+  md << "| world | map | fit rms cm | runs | committed | correct | confidently wrong | time to "
+        "relocalise s median | "
+        "worst | error at commit cm median / max | heading at commit deg max | max error after "
+        "(from commit + 5 s) "
         "cm / deg | saved ids kept | duplicate lines |\n"
      << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const RelocWorld& w : worlds) {
@@ -273,29 +294,36 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
     const size_t n = w.runs.size();
     const auto pct = [n](int k) { return std::to_string(k) + "/" + std::to_string(n); };
     const bool any = !times.empty();
-    md << "| " << w.world << " | " << (w.map_done ? "done" : "not done") << ", " << w.map_lines << " lines, "
-       << w.map_objects << " objects | " << F(w.fit_rms_m * 100) << " | " << n << " | " << pct(committed) << " | "
-       << pct(correct) << " | " << wrong << " | " << (any ? F(Quantile(times, 0.5)) : "-") << " | "
-       << (any ? F(Quantile(times, 1.0)) : "-") << " | "
-       << (any ? F(Quantile(at_commit, 0.5)) + " / " + F(at_commit_max) : "-") << " | "
-       << (any ? F(heading_max) : "-") << " | " << (any_after ? F(after_m) + " / " + F(after_deg) : "-") << " | "
-       << kept << "/" << saved << " | " << dups << " |\n";
+    md << "| " << w.world << " | " << (w.map_done ? "done" : "not done") << ", " << w.map_lines
+       << " lines, " << w.map_objects << " objects | " << F(w.fit_rms_m * 100) << " | " << n
+       << " | " << pct(committed) << " | " << pct(correct) << " | " << wrong << " | "
+       << (any ? F(Quantile(times, 0.5)) : "-") << " | " << (any ? F(Quantile(times, 1.0)) : "-")
+       << " | " << (any ? F(Quantile(at_commit, 0.5)) + " / " + F(at_commit_max) : "-") << " | "
+       << (any ? F(heading_max) : "-") << " | "
+       << (any_after ? F(after_m) + " / " + F(after_deg) : "-") << " | " << kept << "/" << saved
+       << " | " << dups << " |\n";
   }
   md << "\n## Every run\n\n"
-     << "| world | seed | start (world) | end | committed at s (time to relocalise) | hypotheses | attempts | error at commit cm / deg | "
+     << "| world | seed | start (world) | end | committed at s (time to relocalise) | hypotheses | "
+        "attempts | error at commit cm / deg | "
         "final error cm / deg | confidently wrong | ids kept | duplicates |\n"
      << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const RelocWorld& w : worlds) {
     for (const RelocRun& r : w.runs) {
-      md << "| " << w.world << " | " << r.seed << " | " << F(r.start.x, 2) << ", " << F(r.start.y, 2) << ", "
-         << F(r.start.theta * kDeg, 0) << "° | " << r.end_state << " at " << F(r.end_t) << " s | "
-         << (r.committed ? F(r.commit_t) + " (" + F(r.relocalize_s) + ")" : "-") << " | " << (r.committed ? std::to_string(r.hypotheses) : "-")
-         << " | " << r.attempts << " | "
-         << (r.committed ? F(r.at_commit.position_m * 100) + " / " + F(r.at_commit.heading_rad * kDeg) : "-")
+      md << "| " << w.world << " | " << r.seed << " | " << F(r.start.x, 2) << ", "
+         << F(r.start.y, 2) << ", " << F(r.start.theta * kDeg, 0) << "° | " << r.end_state << " at "
+         << F(r.end_t) << " s | "
+         << (r.committed ? F(r.commit_t) + " (" + F(r.relocalize_s) + ")" : "-") << " | "
+         << (r.committed ? std::to_string(r.hypotheses) : "-") << " | " << r.attempts << " | "
+         << (r.committed
+                 ? F(r.at_commit.position_m * 100) + " / " + F(r.at_commit.heading_rad * kDeg)
+                 : "-")
          << " | "
-         << (r.committed ? F(r.final_error.position_m * 100) + " / " + F(r.final_error.heading_rad * kDeg) : "-")
-         << " | " << (r.confidently_wrong ? "yes" : "no") << " | " << r.kept_ids << "/" << r.saved_lines << " | "
-         << r.duplicates << " |\n";
+         << (r.committed
+                 ? F(r.final_error.position_m * 100) + " / " + F(r.final_error.heading_rad * kDeg)
+                 : "-")
+         << " | " << (r.confidently_wrong ? "yes" : "no") << " | " << r.kept_ids << "/"
+         << r.saved_lines << " | " << r.duplicates << " |\n";
     }
   }
   return md.str();

@@ -45,44 +45,47 @@ struct PoseError {
 PoseError ErrorInWorld(const Pose2& map_pose, const Pose2& map_to_world, const Pose2& truth);
 
 // The saved lines' ids still present in `out`.
-int KeptLineIds(const std::vector<slam::LineFeature>& saved, const std::vector<slam::LineFeature>& out);
+int KeptLineIds(const std::vector<slam::LineFeature>& saved,
+                const std::vector<slam::LineFeature>& out);
 // Lines of `out` with an id the saved map does not have that lie on a saved
 // line: within angle_rad of its direction, both end points within dist_m of
 // its infinite line, and overlapping it along its direction (a collinear piece
 // beyond its ends is new wall, not a duplicate). Both maps in the same frame.
-int DuplicateLines(const std::vector<slam::LineFeature>& saved, const std::vector<slam::LineFeature>& out,
-                   double dist_m = 0.05, double angle_rad = 3 * M_PI / 180);
+int DuplicateLines(const std::vector<slam::LineFeature>& saved,
+                   const std::vector<slam::LineFeature>& out, double dist_m = 0.05,
+                   double angle_rad = 3 * M_PI / 180);
 
 // n start poses uniform over the room's bounding box with a uniform heading,
 // each free (sim::FreePose) with clearance_m; seeded, deterministic.
-std::vector<Pose2> RandomFreeStarts(const sim::World& world, int n, double clearance_m, uint64_t seed);
+std::vector<Pose2> RandomFreeStarts(const sim::World& world, int n, double clearance_m,
+                                    uint64_t seed);
 
 struct RelocRun {
-  Pose2 start;               // world frame
+  Pose2 start;  // world frame
   uint64_t seed = 0;
   std::string end_state;
   double end_t = 0;
-  bool committed = false;    // status.relocalize.committed at some time
-  double commit_t = 0;       // robot time of the first commit
-  double relocalize_s = 0;   // from status.relocalize.started_t to the commit
-  int hypotheses = 0;        // at the first commit
-  int attempts = 0;          // status.relocalize.attempts at the end
-  PoseError at_commit;       // the first tick after the commit
-  PoseError max_after;       // over the rest of the run (from 5 s after the commit)
+  bool committed = false;      // status.relocalize.committed at some time
+  double commit_t = 0;         // robot time of the first commit
+  double relocalize_s = 0;     // from status.relocalize.started_t to the commit
+  int hypotheses = 0;          // at the first commit
+  int attempts = 0;            // status.relocalize.attempts at the end
+  PoseError at_commit;         // the first tick after the commit
+  PoseError max_after;         // over the rest of the run (from 5 s after the commit)
   bool after_sampled = false;  // the run lasted that long
   PoseError final_error;
   bool confidently_wrong = false;  // committed, > 20 cm or 10 deg off, not recovered within 30 s
                                    // (or still off when the run ended)
-  bool correct = false;            // committed and the error at commit within 20 cm and 10 deg, never wrong
+  bool correct = false;  // committed and the error at commit within 20 cm and 10 deg, never wrong
   int saved_lines = 0, kept_ids = 0, duplicates = 0;
 };
 
 struct RelocWorld {
   std::string world;
-  bool map_done = false;     // the first mission finished
+  bool map_done = false;  // the first mission finished
   double map_t = 0;
   int map_lines = 0, map_objects = 0;
-  double fit_rms_m = 0;      // residual of the map -> world fit
+  double fit_rms_m = 0;  // residual of the map -> world fit
   Pose2 map_to_world;
   std::vector<RelocRun> runs;
 };
@@ -90,9 +93,9 @@ struct RelocWorld {
 struct RelocOptions {
   int runs = 5;
   uint64_t seed = 1;
-  double map_max_time_s = 900;   // the first (exploration) mission
-  double max_time_s = 200;       // each relocalisation run
-  double after_commit_s = 60;    // a run ends this long after the commit
+  double map_max_time_s = 900;     // the first (exploration) mission
+  double max_time_s = 200;         // each relocalisation run
+  double after_commit_s = 60;      // a run ends this long after the commit
   double clearance_extra_m = 0.1;  // start poses: robot radius + this from walls and furniture
   double wrong_position_m = 0.20;
   double wrong_heading_rad = 10 * M_PI / 180;
@@ -104,7 +107,8 @@ RelocWorld EvaluateRelocalization(const sim::World& world, const robot::CoreOpti
 
 // docs/relocalization.md: rates per world, time to relocalise (median and
 // worst), errors, ids kept, duplicates, and every run.
-std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOptions& ro, const std::string& command);
+std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOptions& ro,
+                          const std::string& command);
 
 }  // namespace irslam::metrics
 

@@ -39,7 +39,8 @@ void ExpectRoundTrip(const json& j) {
 }
 
 TEST(MapParseTest, TheGoldenMissionMapComesBackExactly) {
-  const json j = ReadJson(std::string(IRSLAM_SOURCE_DIR) + "/tests/unit/testdata/core_map.golden.json");
+  const json j =
+      ReadJson(std::string(IRSLAM_SOURCE_DIR) + "/tests/unit/testdata/core_map.golden.json");
   ExpectRoundTrip(j);
   robot::MapSnapshot m;
   std::string why;
@@ -61,7 +62,8 @@ TEST(MapParseTest, TheGoldenMissionMapComesBackExactly) {
 
 TEST(MapParseTest, ACleaningMissionsMapComesBackExactlyWithItsCells) {
   std::string error;
-  auto world = sim::LoadWorldFile(std::string(IRSLAM_SOURCE_DIR) + "/tests/worlds/fig14.json", &error);
+  auto world =
+      sim::LoadWorldFile(std::string(IRSLAM_SOURCE_DIR) + "/tests/worlds/fig14.json", &error);
   ASSERT_TRUE(world) << error;
   robot::CoreOptions o = robot::DefaultCoreOptions();
   o.mission.mode = "clean";
@@ -129,7 +131,8 @@ robot::MapSnapshot SyntheticMap() {
   c.cells = {{1, {{0, 0}, {1, 0}, {1, 1}}, {{0.1, 0.1}, {0.9, 0.1}}, true, false},
              {2, {{1, 0}, {2, 0}, {2, 1}}, {}, false, true}};
   m.cleaning = c;
-  m.calibration = slam::CalibrationEstimate{{1.0043, 0.9941, 1.0178}, Eigen::Vector3d(4e-3, 4e-3, 2e-3), 3e-4};
+  m.calibration =
+      slam::CalibrationEstimate{{1.0043, 0.9941, 1.0178}, Eigen::Vector3d(4e-3, 4e-3, 2e-3), 3e-4};
   m.relocalized = robot::MapSnapshot::Relocalized{31.5, 2};
   return m;
 }
@@ -157,7 +160,9 @@ TEST(MapParseTest, EveryTypedFieldComesBack) {
   json served = j;
   served["saved"] = {{"seq", 3}, {"reason", "stop"}, {"path", "/var/lib/irslam/map.json"}};
   EXPECT_TRUE(MapFromJson(served, &back, &why)) << why;
-  EXPECT_TRUE(MapFromJson(json{{"frame", "map"}, {"state", "idle"}, {"lines", json::array()},
+  EXPECT_TRUE(MapFromJson(json{{"frame", "map"},
+                               {"state", "idle"},
+                               {"lines", json::array()},
                                {"objects", json::array()}},
                           &back, &why))
       << why;
@@ -178,9 +183,10 @@ TEST(MapParseTest, TheStatusShowsRelocalisationOnlyWhenThereIsSome) {
   robot::CoreStatus s;
   EXPECT_FALSE(ToJson(s).contains("relocalize"));
   s.relocalize = robot::RelocalizeStatus{false, 2.5, 0, 4, 0.25, 1.5, 1};
-  EXPECT_EQ(ToJson(s)["relocalize"].dump(),
-            R"({"attempts":1,"best_score":0.25,"committed":false,"committed_t":null,"evidence_m":1.5,)"
-            R"("hypotheses":4,"started_t":2.5})");
+  EXPECT_EQ(
+      ToJson(s)["relocalize"].dump(),
+      R"({"attempts":1,"best_score":0.25,"committed":false,"committed_t":null,"evidence_m":1.5,)"
+      R"("hypotheses":4,"started_t":2.5})");
   s.relocalize->committed = true;
   s.relocalize->committed_t = 20.5;
   s.relocalize->best_score = -std::numeric_limits<double>::infinity();
@@ -222,14 +228,18 @@ TEST(MapParseTest, EachMalformedFieldIsOneClearLine) {
       {"/room/walls/middle", {1}, "map.room.walls.middle: not bottom, right, top or left"},
       {"/room/box", {1, 2, 3}, "map.room.box: not an array of 4 numbers"},
       {"/objects/0/lines/0", "7", "map.objects[0].lines[0]: not an integer"},
-      {"/objects/1", {{"id", 5}, {"kind", "free"}, {"lines", json::array()}}, "map.objects[1].id: object 5 is in the map twice"},
+      {"/objects/1",
+       {{"id", 5}, {"kind", "free"}, {"lines", json::array()}},
+       "map.objects[1].id: object 5 is in the map twice"},
       {"/objects/0/kind", "sofa", "map.objects[0].kind: not \"wall_contact\" or \"free\""},
       {"/objects/0/complete", 1, "map.objects[0].complete: not a boolean"},
       {"/objects/0/note", 7, "map.objects[0].note: not a string"},
       {"/trajectory/1", {1, 2, 3}, "map.trajectory[1]: not an array of 4 numbers"},
       {"/cleaning/state", "mopping", "map.cleaning.state: unknown value \"mopping\""},
       {"/cleaning/cells/0/done", "yes", "map.cleaning.cells[0].done: not a boolean"},
-      {"/cleaning/cells/1/polygon/0", {1}, "map.cleaning.cells[1].polygon[0]: not an array of 2 numbers"},
+      {"/cleaning/cells/1/polygon/0",
+       {1},
+       "map.cleaning.cells[1].polygon[0]: not an array of 2 numbers"},
       {"/cleaning/finished_t", "late", "map.cleaning.finished_t: not a number"},
       {"/calibration/scale/0", 3.0, "map.calibration.scale: a scale factor outside [0.5, 1.5]"},
       {"/calibration/std", {1, 2}, "map.calibration.std: not an array of 3 numbers"},

@@ -74,14 +74,14 @@ TEST(RelocEvalTest, KeptIdsAndDuplicateLines) {
   const std::vector<slam::LineFeature> saved = {Line(1, {0, 0}, {4, 0}), Line(3, {4, 0}, {4, 5}),
                                                 Line(7, {1, 1}, {2, 1})};
   std::vector<slam::LineFeature> out = {
-      Line(1, {0, 0.01}, {4, 0.01}),                 // the same wall, kept id
-      Line(3, {4, 0}, {4, 5}),                       // kept
-      Line(20, {1, 0.03}, {3, 0.02}),                // a new line on wall 1: duplicate
-      Line(21, {4.04, 4.8}, {4.03, 2}),              // on wall 3, reversed direction: duplicate
-      Line(22, {5, 0.01}, {6, 0.01}),                // collinear with 1 but beyond its end: new wall
-      Line(23, {1, 0.2}, {3, 0.2}),                  // parallel, 20 cm off: not
-      Line(24, {0.5, 0.0}, {3.5, 0.2}),              // 3.8 deg off: not
-      Line(25, {1.2, 1.04}, {1.8, 0.98}),            // over object side 7 but 5.7 deg off: not
+      Line(1, {0, 0.01}, {4, 0.01}),       // the same wall, kept id
+      Line(3, {4, 0}, {4, 5}),             // kept
+      Line(20, {1, 0.03}, {3, 0.02}),      // a new line on wall 1: duplicate
+      Line(21, {4.04, 4.8}, {4.03, 2}),    // on wall 3, reversed direction: duplicate
+      Line(22, {5, 0.01}, {6, 0.01}),      // collinear with 1 but beyond its end: new wall
+      Line(23, {1, 0.2}, {3, 0.2}),        // parallel, 20 cm off: not
+      Line(24, {0.5, 0.0}, {3.5, 0.2}),    // 3.8 deg off: not
+      Line(25, {1.2, 1.04}, {1.8, 0.98}),  // over object side 7 but 5.7 deg off: not
   };
   EXPECT_EQ(KeptLineIds(saved, out), 2);
   EXPECT_EQ(DuplicateLines(saved, out), 2);
@@ -93,7 +93,8 @@ TEST(RelocEvalTest, KeptIdsAndDuplicateLines) {
 
 TEST(RelocEvalTest, RandomStartsAreFreeSeededAndSpread) {
   std::string error;
-  auto world = sim::LoadWorldFile(std::string(IRSLAM_SOURCE_DIR) + "/tests/worlds/fig14.json", &error);
+  auto world =
+      sim::LoadWorldFile(std::string(IRSLAM_SOURCE_DIR) + "/tests/worlds/fig14.json", &error);
   ASSERT_TRUE(world) << error;
   const auto a = RandomFreeStarts(*world, 50, 0.3, 11);
   const auto b = RandomFreeStarts(*world, 50, 0.3, 11);
@@ -114,7 +115,8 @@ TEST(RelocEvalTest, RandomStartsAreFreeSeededAndSpread) {
 
 TEST(RelocEvalTest, FreePoseSaysWhyNot) {
   std::string error;
-  auto world = sim::LoadWorldFile(std::string(IRSLAM_SOURCE_DIR) + "/tests/worlds/fig14.json", &error);
+  auto world =
+      sim::LoadWorldFile(std::string(IRSLAM_SOURCE_DIR) + "/tests/worlds/fig14.json", &error);
   ASSERT_TRUE(world) << error;
   std::string why;
   EXPECT_TRUE(sim::FreePose(*world, {3.0, 0.8, 0}, 0.2, &why)) << why;
@@ -132,7 +134,9 @@ TEST(RelocEvalTest, FreePoseSaysWhyNot) {
   EXPECT_NEAR(p->theta, 4 - 2 * M_PI, 1e-12);
   for (const char* bad : {"1,2", "1,2,3,4", "1,,3", "a,b,c", "1,2,nan", "", "1,2,3,"}) {
     EXPECT_FALSE(sim::ParsePoseArg(bad, &why)) << bad;
-    EXPECT_EQ(why, std::string("expected X,Y,THETA (three numbers: metres, metres, radians), got '") + bad + "'");
+    EXPECT_EQ(why,
+              std::string("expected X,Y,THETA (three numbers: metres, metres, radians), got '") +
+                  bad + "'");
   }
 }
 
