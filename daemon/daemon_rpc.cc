@@ -32,9 +32,11 @@ nlohmann::json Daemon::Start(const rpc::Request& req) {
   if (foreign_.Present(WallNow())) {
     return rpc::MakeError(req.id, rpc::kRejected, std::string("start rejected: ") + kForeignCommanderReason);
   }
-  // contracts §7: optional {"mode": "explore"|"clean", "fresh": bool}. fresh
-  // (forget the saved map) is accepted: every start explores from nothing today.
+  // contracts §7: optional {"mode": "explore"|"clean", "fresh": bool}. fresh:
+  // forget the saved map (the next save replaces its file); without it a start
+  // with a saved map relocalises in it first (issue 14).
   std::string mode = settings_.core.mission.mode;
+  bool fresh = false;
   if (req.params.is_object()) {
     for (const auto& [k, v] : req.params.items()) {
       if (k == "mode") {
@@ -43,6 +45,7 @@ nlohmann::json Daemon::Start(const rpc::Request& req) {
         mode = v.get<std::string>();
       } else if (k == "fresh") {
         if (!v.is_boolean()) return rpc::MakeError(req.id, rpc::kInvalidParams, "fresh must be true or false");
+        fresh = v.get<bool>();
       } else {
         return rpc::MakeError(req.id, rpc::kInvalidParams, "unknown parameter: " + k);
       }
@@ -54,12 +57,23 @@ nlohmann::json Daemon::Start(const rpc::Request& req) {
   const bool running = core_->state() != control::MissionState::kIdle && core_->state() != control::MissionState::kDone &&
                        core_->state() != control::MissionState::kFault;
   if (!running) core_->SetCleanMode(mode == "clean");
+  // fresh: the core forgets the saved map and its own live map (RobotCore::SetSavedMap).
+  const bool forget = fresh && !running;
+  if (forget) core_->SetSavedMap(std::nullopt);
   std::string why;
-  if (!core_->Start(now, &why)) return rpc::MakeError(req.id, rpc::kRejected, "start rejected: " + why);
+  if (!core_->Start(now, &why)) {
+    if (forget) GiveSavedMap();  // not started: nothing forgotten
+    return rpc::MakeError(req.id, rpc::kRejected, "start rejected: " + why);
+  }
+  if (forget && saved_map_) {
+    saved_map_.reset();
+    std::fprintf(stderr, "<6>irslamd: start fresh: the saved map is forgotten (its file is replaced at the next save)\n");
+  }
   maps_.OnMissionStarted();
   // For irslam-replay (docs/replay.md): the mode goes with the start.
   if (recorder_) recorder_->Note(core_->clean_mode() ? "start_clean" : "start", now);
-  std::fprintf(stderr, "<6>irslamd: mission started (mode %s)\n", mode.c_str());
+  std::fprintf(stderr, "<6>irslamd: mission started (mode %s%s)\n", mode.c_str(),
+               core_->saved_map() ? ", in the saved map" : "");
   return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
 }
 

@@ -138,7 +138,8 @@ void AddCommands(CLI::App& app, CtlArgs* a) {
   a->start->add_option("--mode", a->mode, "explore (map only) or clean (map, clean, return to the start); "
                                           "default: the daemon's mission.mode")
       ->check(CLI::IsMember({"explore", "clean"}));
-  a->start->add_flag("--fresh", a->fresh, "Forget the saved map (every start explores from nothing today)");
+  a->start->add_flag("--fresh", a->fresh,
+                     "Forget the saved map: explore from nothing instead of relocalising in it");
   a->clean = app.add_subcommand("clean", "Start the mission in mode clean");
   a->stop = app.add_subcommand("stop", "Stop the robot");
   a->map = app.add_subcommand("map", "Fetch the map");

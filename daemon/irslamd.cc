@@ -52,12 +52,24 @@ bool Daemon::Open(std::string* error) {
   bus_ = drivers::OpenCanBus(io_, bus_options, error);
   if (!bus_) return false;
   maps_.Load();  // the map saved by the previous run (a bad file is moved aside, never loaded)
+  // The next start relocalises in it (issue 14). A file that checks out but
+  // does not make a map is moved aside too; the daemon starts without it.
+  if (maps_.stored()) {
+    robot::MapSnapshot saved;
+    std::string why;
+    if (MapFromJson(maps_.stored()->map, &saved, &why)) {
+      UseAsSavedMap(std::move(saved), "the saved map");
+    } else {
+      std::fprintf(stderr, "<3>irslamd: %s\n", maps_.SetAside(why).c_str());
+    }
+  }
   // Its odometry calibration, if it kept one: the core starts from it (nothing
   // has reached the core yet, so it is simply made again with it).
   if (maps_.stored()) {
     if (const auto c = CalibrationFromMap(maps_.stored()->map)) {
       settings_.core.slam.initial_calibration = c;
       core_ = std::make_unique<robot::RobotCore>(settings_.core);
+      GiveSavedMap();
       std::fprintf(stderr, "<6>irslamd: odometry calibration from the saved map: wheel radius scale %.5f/%.5f, "
                    "track width scale %.5f\n", c->value.left, c->value.right, c->value.base);
     }
@@ -71,6 +83,18 @@ bool Daemon::Open(std::string* error) {
   bus_->Start([this](const can_frame& f, double) { OnFrame(f); });
   gpio_->Start([this](drivers::Gpio::Input in, bool active) { OnGpioInput(in, active); });
   return true;
+}
+
+void Daemon::UseAsSavedMap(robot::MapSnapshot map, const char* source) {
+  if (!map.room.box) {
+    std::fprintf(stderr, "<5>irslamd: %s has no room model yet (%zu lines): the next start does not relocalise in it%s\n",
+                 source, map.lines.size(), saved_map_ ? " but in the previous one" : "");
+    return;
+  }
+  std::fprintf(stderr, "<6>irslamd: the next start relocalises in %s (%zu lines, %zu objects)\n", source,
+               map.lines.size(), map.objects.size());
+  saved_map_ = std::move(map);
+  GiveSavedMap();
 }
 
 bool Daemon::OpenAccess(std::string* error) {
@@ -217,6 +241,13 @@ void Daemon::OnStateChange(double now) {
   if (core_->state() == last_state_) return;
   // Each model completion is saved (the model step just ended).
   if (last_state_ == control::MissionState::kModel) maps_.Save("model", [this] { return LiveMap(); });
+  const auto ended = [](control::MissionState s) {
+    return s == control::MissionState::kIdle || s == control::MissionState::kDone;
+  };
+  // A mission finished or stopped (its map saved): the next start relocalises in it.
+  if (ended(core_->state()) && !ended(last_state_) && maps_.has_live_map()) {
+    UseAsSavedMap(core_->Map(), "this mission's map");
+  }
   last_state_ = core_->state();
   std::fprintf(stderr, "<6>irslamd: state=%s reason=\"%s\"\n", control::ToString(last_state_),
                core_->Status(now).mission.reason.c_str());
@@ -309,6 +340,7 @@ void Daemon::ApplyOptions(DaemonSettings fresh) {
   settings_ = fresh;
   core_ = std::make_unique<robot::RobotCore>(fresh.core);
   core_->SetWorkClock([this] { return Ns(clock_()); });
+  GiveSavedMap();
   if (foreign_.Present(WallNow())) core_->LatchFault(RobotNow(), kForeignCommanderReason);
   if (gpio_) gpio_->Replay();  // the new core learns the inputs' present levels
   scheduler_ = PeriodScheduler(PeriodNs(fresh.core, options_.time_scale), Ns(clock_()));

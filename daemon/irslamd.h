@@ -82,6 +82,11 @@ class Daemon : public ApiServer::Dispatcher {
   const DaemonSettings& settings() const { return settings_; }
   const robot::CoreOptions& core_options() const { return settings_.core; }
   const MapService& maps() const { return maps_; }
+  const robot::RobotCore& core() const { return *core_; }
+  // The map the next start relocalises in (issue 14): the saved file's at Open,
+  // then each finished or stopped mission's; none after start {"fresh": true}
+  // or when the map has no room model yet (see UseAsSavedMap).
+  const std::optional<robot::MapSnapshot>& saved_map() const { return saved_map_; }
 
  private:
   double WallNow() const { return SecondsBetween(start_, clock_()); }
@@ -114,6 +119,13 @@ class Daemon : public ApiServer::Dispatcher {
   // Drives the GPIO outputs (motor enable, LED) from the core's state.
   void ApplyOutputs(double now);
   bool OpenAccess(std::string* error);
+  // Keeps map as the one the next start relocalises in, and hands it to the
+  // core, when it has a room model (a mission stopped before its first loop
+  // leaves a map too partial to relocalise in: the previous one stays).
+  // `source` names it in the log.
+  void UseAsSavedMap(robot::MapSnapshot map, const char* source);
+  // Hands saved_map_ to a new core.
+  void GiveSavedMap() { core_->SetSavedMap(saved_map_); }
 
   boost::asio::io_context& io_;
   DaemonOptions options_;
@@ -122,6 +134,7 @@ class Daemon : public ApiServer::Dispatcher {
   WallClock clock_;
   WallTime start_;
   std::unique_ptr<robot::RobotCore> core_;
+  std::optional<robot::MapSnapshot> saved_map_;
   std::unique_ptr<drivers::CanBus> bus_;
   std::unique_ptr<ApiServer> api_;
   std::unique_ptr<drivers::Gpio> gpio_;

@@ -1,6 +1,8 @@
 #include "daemon/map_service.h"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <utility>
 
 namespace irslam {
@@ -43,6 +45,15 @@ void MapService::Load() {
     std::fprintf(stderr, "<6>irslamd: map loaded from %s (save %llu, %s, %zu lines)\n", path_.c_str(),
                  static_cast<unsigned long long>(stored_->seq), stored_->reason.c_str(), LineCount(stored_->map));
   }
+}
+
+std::string MapService::SetAside(const std::string& why) {
+  stored_.reset();
+  const std::string aside = path_ + ".bad";
+  if (std::rename(path_.c_str(), aside.c_str()) != 0) {
+    return "map: " + path_ + ": " + why + "; cannot move it aside: " + std::strerror(errno) + "; not used";
+  }
+  return "map: " + path_ + ": " + why + "; kept aside as " + aside + ", not used";
 }
 
 void MapService::OnCoreReplaced(const nlohmann::json& old_map) {

@@ -59,6 +59,11 @@ class MapService {
 
   // At start: reads the previous run's map (a bad file is moved aside and logged).
   void Load();
+  // The loaded map turned out unusable (it checks out as a file, but its
+  // content does not make a map: daemon/core_json.h MapFromJson): the file is
+  // moved aside as map.json.bad (replacing an older one) and forgotten, as if
+  // there had been none. Returns a one-line account for the log.
+  std::string SetAside(const std::string& why);
   // A mission started on the live core: from now on its map is the one to serve and save.
   void OnMissionStarted() { live_ran_ = true; }
   // The core is about to be replaced (a reload): its map, if a mission made one, is

@@ -14,7 +14,8 @@ namespace irslam::sim {
 
 bool FaultSpec::any() const {
   return loss_p > 0 || burst_len_s > 0 || corrupt_p > 0 || duplicate_p > 0 || reorder_p > 0 || delay_p > 0 ||
-         !silence.empty() || !flood.empty() || !stuck_ir.empty() || !encoder_glitch.empty();
+         !silence.empty() || !flood.empty() || !stuck_ir.empty() || !encoder_glitch.empty() ||
+         !kidnap.empty();
 }
 
 namespace {
@@ -131,10 +132,16 @@ bool AddFault(const Item& item, FaultSpec* f, std::string* error) {
       return false;
     }
     f->encoder_glitch.push_back({g.at, g.counts, left, right});
+  } else if (n == "kidnap") {
+    KidnapFaultParams k;
+    if (!ReadParams(item, KidnapFaultKeys(), {"at", "x", "y"}, &k, error)) return false;
+    f->kidnap.push_back({k.at, {k.x, k.y, NormalizeAngle(k.theta)}});
+    std::stable_sort(f->kidnap.begin(), f->kidnap.end(),
+                     [](const FaultSpec::Kidnap& a, const FaultSpec::Kidnap& b) { return a.at < b.at; });
   } else {
     *error = "faults: unknown fault '" + n +
              "' (known: loss, burst, corrupt, duplicate, reorder, delay, silence, flood, stuck_ir, "
-             "encoder_glitch)";
+             "encoder_glitch, kidnap)";
     return false;
   }
   return true;
@@ -205,6 +212,23 @@ options::Table<EncoderGlitchFaultParams> EncoderGlitchFaultKeys() {
       {"wheel", &G::wheel, 0, 0, "", "left, right or both"},
   };
   return kKeys;
+}
+
+options::Table<KidnapFaultParams> KidnapFaultKeys() {
+  using K = KidnapFaultParams;
+  static constexpr options::Key<K> kKeys[] = {
+      {"at", &K::at, 0, kMaxTimeS, "s", "the robot is lifted at this robot time"},
+      {"x", &K::x, -1000, 1000, "m", "and put down here (world frame)"},
+      {"y", &K::y, -1000, 1000, "m", "(world frame)"},
+      {"theta", &K::theta, -10, 10, "rad", "heading when put down"},
+  };
+  return kKeys;
+}
+
+std::optional<Pose2> FaultInjector::TakeKidnap(double t) {
+  if (kidnaps_taken_ >= spec_.kidnap.size() || spec_.kidnap[kidnaps_taken_].at > t) return std::nullopt;
+  ++counters_.kidnapped;
+  return spec_.kidnap[kidnaps_taken_++].to;
 }
 
 std::optional<FaultSpec> ParseFaultSpec(const std::string& spec, std::string* error) {

@@ -15,6 +15,9 @@
 //                               8000: a 1 Mbit/s bus at full load), ids 0x200-0x7FF
 //   stuck_ir:sensor=I:at=T[:for=S]  sensor I's raw value stays what it was at T
 //   encoder_glitch:at=T:counts=N[:wheel=left|right|both]  the count jumps by N and stays
+//   kidnap:at=T:x=X:y=Y[:theta=A]  the robot is lifted and put down at (X, Y, A) (world
+//                               frame, metres and radians): the true pose jumps, the
+//                               encoders count no motion for the jump (issue 14)
 //
 // Times are robot seconds. Probabilities apply to the controller's frames
 // (ENCODER, CTRL_STATUS, IR_A, IR_B). Each fault's keys are an option table
@@ -31,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "types/geometry.h"
 #include "types/options.h"
 
 namespace irslam::sim {
@@ -62,6 +66,9 @@ struct EncoderGlitchFaultParams {
   int counts = 0;
   std::string wheel = "left";
 };
+struct KidnapFaultParams {
+  double at = 0, x = 0, y = 0, theta = 0;
+};
 options::Table<ChanceFaultParams> ChanceFaultKeys();
 options::Table<BurstFaultParams> BurstFaultKeys();
 options::Table<DelayFaultParams> DelayFaultKeys();
@@ -69,6 +76,7 @@ options::Table<SilenceFaultParams> SilenceFaultKeys();
 options::Table<FloodFaultParams> FloodFaultKeys();
 options::Table<StuckIrFaultParams> StuckIrFaultKeys();
 options::Table<EncoderGlitchFaultParams> EncoderGlitchFaultKeys();
+options::Table<KidnapFaultParams> KidnapFaultKeys();
 
 struct FaultSpec {
   double loss_p = 0;
@@ -96,6 +104,13 @@ struct FaultSpec {
     bool left = true, right = false;
   };
   std::vector<Glitch> encoder_glitch;
+  // The robot's true pose is set to `to` at robot time `at` (the simulator's,
+  // not the bus's: FaultInjector::TakeKidnap hands it over).
+  struct Kidnap {
+    double at = 0;
+    Pose2 to;
+  };
+  std::vector<Kidnap> kidnap;
   bool any() const;
 };
 
@@ -104,7 +119,7 @@ std::optional<FaultSpec> ParseFaultSpec(const std::string& spec, std::string* er
 
 struct FaultCounters {
   uint64_t lost = 0, corrupted = 0, duplicated = 0, reordered = 0, delayed = 0, silenced = 0,
-           flooded = 0, stuck = 0, glitched = 0;
+           flooded = 0, stuck = 0, glitched = 0, kidnapped = 0;
 };
 
 class FaultInjector {
@@ -116,6 +131,11 @@ class FaultInjector {
   void Process(double t, const std::vector<can_frame>& in, std::vector<can_frame>* out);
   // Foreign frames of a flood active at robot time t, for wall_dt seconds of wall time.
   void Flood(double t, double wall_dt, std::vector<can_frame>* out);
+
+  // A kidnap due at robot time t (its time reached and not yet taken), once
+  // each, in time order: the caller teleports the simulated robot
+  // (SimController::Teleport) before advancing it to t.
+  std::optional<Pose2> TakeKidnap(double t);
 
   const FaultCounters& counters() const { return counters_; }
 
@@ -135,6 +155,7 @@ class FaultInjector {
   std::vector<std::optional<uint16_t>> stuck_value_;
   double flood_carry_ = 0;
   uint32_t flood_id_ = 0x200;
+  size_t kidnaps_taken_ = 0;  // spec_.kidnap is sorted by time
 };
 
 }  // namespace irslam::sim

@@ -1,5 +1,6 @@
 // irslam-sim: the simulated motor controller and world (contracts.md §2).
 //   irslam-sim run   --world W.json [--seed S] [--max-time SECONDS] --map-out map.json --truth-out truth.json
+//                    [--map-in MAP.json] [--start X,Y,THETA]
 //   irslam-sim run   --world W.json --baseline bounce [--max-time SECONDS] [--map-out R.json] [--svg R.svg]
 //   irslam-sim serve --can IFACE --world W.json [--seed S] [--time-scale K] [--truth-out truth.json]
 #include <CLI/CLI.hpp>
@@ -54,6 +55,8 @@ struct Common {
   std::string mode;     // run --mode explore|clean ("": the config's mission.mode)
   std::string pgm_out;  // run --pgm FILE.pgm (daemon/map_pgm.h)
   double pgm_res = kDefaultPgmResolutionM;
+  std::string map_in;  // run --map-in MAP.json: start from this saved map (issue 14)
+  std::string start;   // run --start X,Y,THETA: replaces the world's start pose
 };
 
 bool Load(const Common& c, World* world, robot::CoreOptions* core, uint64_t* seed) {
@@ -86,9 +89,63 @@ bool LoadFaults(const Common& c, FaultSpec* spec) {
 }
 
 nlohmann::json FaultsJson(const FaultCounters& f) {
-  return {{"lost", f.lost},         {"corrupted", f.corrupted}, {"duplicated", f.duplicated},
-          {"reordered", f.reordered}, {"delayed", f.delayed},   {"silenced", f.silenced},
-          {"flooded", f.flooded},   {"stuck", f.stuck},         {"glitched", f.glitched}};
+  nlohmann::json j = {{"lost", f.lost},         {"corrupted", f.corrupted}, {"duplicated", f.duplicated},
+                      {"reordered", f.reordered}, {"delayed", f.delayed},   {"silenced", f.silenced},
+                      {"flooded", f.flooded},   {"stuck", f.stuck},         {"glitched", f.glitched}};
+  if (f.kidnapped > 0) j["kidnapped"] = f.kidnapped;
+  return j;
+}
+
+// A saved map: a map file (contracts §4, irslam-sim run --map-out, irslamctl
+// map --out) or the daemon's saved file (daemon/map_store.h: the map inside).
+std::optional<robot::MapSnapshot> LoadSavedMap(const std::string& path, std::string* why) {
+  std::string text;
+  if (!ReadRegularFile(path, 64u << 20, &text, why)) return std::nullopt;
+  auto j = ParseJsonText(text, why);
+  if (!j) return std::nullopt;
+  if (j->is_object() && j->contains("format") && (*j)["format"] == "irslam-map") {
+    if (!j->contains("map")) {
+      *why = "an irslam map file without a map";
+      return std::nullopt;
+    }
+    j = (*j)["map"];
+  }
+  robot::MapSnapshot map;
+  if (!MapFromJson(*j, &map, why)) return std::nullopt;
+  return map;
+}
+
+// run --start, --map-in and the kidnap targets (sim/sim_run.h RunSetup); false
+// after a one-line message.
+bool LoadRunSetup(const Common& c, const FaultSpec& faults, World* world, robot::CoreOptions* core,
+                  RunSetup* setup) {
+  std::string why;
+  const double clearance = core->slam.geometry.radius_m;
+  if (!c.start.empty()) {
+    const auto pose = ParsePoseArg(c.start, &why);
+    if (!pose || !FreePose(*world, *pose, clearance, &why)) {
+      std::fprintf(stderr, "irslam-sim: --start %s: %s\n", c.start.c_str(), why.c_str());
+      return false;
+    }
+    world->start = *pose;
+  }
+  for (const FaultSpec::Kidnap& k : faults.kidnap) {
+    if (!FreePose(*world, k.to, clearance, &why)) {
+      std::fprintf(stderr, "irslam-sim: --faults: kidnap at %g s: %s\n", k.at, why.c_str());
+      return false;
+    }
+  }
+  if (!c.map_in.empty()) {
+    auto map = LoadSavedMap(c.map_in, &why);
+    if (!map) {
+      std::fprintf(stderr, "irslam-sim: --map-in %s: %s\n", c.map_in.c_str(), why.c_str());
+      return false;
+    }
+    // Its odometry calibration, as the daemon does with its saved map.
+    if (map->calibration) core->slam.initial_calibration = map->calibration;
+    setup->saved_map = std::move(map);
+  }
+  return true;
 }
 
 // The CPU time of this thread (ns): what the work costs, without the time the
@@ -105,7 +162,10 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
   robot::CoreOptions core_opts;
   uint64_t seed;
   FaultSpec faults;
-  if (!Load(c, &world, &core_opts, &seed) || !LoadFaults(c, &faults)) return kExitUsage;
+  RunSetup setup;
+  if (!Load(c, &world, &core_opts, &seed) || !LoadFaults(c, &faults) ||
+      !LoadRunSetup(c, faults, &world, &core_opts, &setup))
+    return kExitUsage;
   // Cleaning has its own time budget after the exploration's.
   if (max_time <= 0) {
     max_time = core_opts.mission.max_time_s +
@@ -157,7 +217,8 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
     }
   };
   InProcessRun run = RunInProcess(world, core_opts, seed, max_time, record, faults.any() ? &faults : nullptr,
-                                  tick_clock == "cpu" ? robot::WorkClockNs(ThreadCpuNs) : robot::WorkClockNs());
+                                  tick_clock == "cpu" ? robot::WorkClockNs(ThreadCpuNs) : robot::WorkClockNs(),
+                                  setup);
   if (!run.error.empty()) {
     std::fprintf(stderr, "irslam-sim: cannot start the mission: %s\n", run.error.c_str());
     return 1;
@@ -315,6 +376,7 @@ int Serve(const Common& c, const std::string& iface, double time_scale) {
         const double wall = std::chrono::duration<double>(Clock::now() - start).count();
         frames.clear();
         out.clear();
+        while (const auto to = injector.TakeKidnap(wall * time_scale)) sim.Teleport(*to);
         sim.AdvanceTo(wall * time_scale, &frames);
         injector.Process(sim.time(), frames, &out);
         injector.Flood(sim.time(), wall - last_wall, &out);
@@ -380,7 +442,7 @@ int main(int argc, char** argv) {
     sub->add_option("--faults", common.faults,
                     "Inject faults between the controller and the bus: NAME[:KEY=VALUE...],... "
                     "(loss, burst, corrupt, duplicate, reorder, delay, silence, flood, stuck_ir, "
-                    "encoder_glitch; docs/reliability.md)");
+                    "encoder_glitch, kidnap; docs/reliability.md)");
     sub->add_option("--config", common.config_path,
                     "irslamd config file (robot geometry, sensors; and the core in 'run')");
   };
@@ -396,6 +458,11 @@ int main(int argc, char** argv) {
                   "explore: map the room (default); clean: map it, clean it, return to the start")
       ->check(CLI::IsMember({"explore", "clean"}));
   run->add_option("--map-out", map_out, "Write the map here (contracts §4)");
+  run->add_option("--map-in", common.map_in,
+                  "Start from this saved map (contracts §4, or the daemon's map file): relocalise in it "
+                  "first; the map written is in its frame with its ids");
+  run->add_option("--start", common.start,
+                  "X,Y,THETA: the robot starts here instead of the world's start pose (world frame)");
   std::string svg_out, lines_out, events_out;
   run->add_option("--svg", svg_out, "Draw the map, the true room and trajectories as SVG");
   run->add_option("--pgm", common.pgm_out, "Write the map as an occupancy grid FILE.pgm and FILE.yaml (ROS map_server)");

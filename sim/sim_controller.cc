@@ -56,6 +56,15 @@ void SimController::HandleFrame(const can_frame& frame) {
   }
 }
 
+void SimController::Teleport(const Pose2& p) {
+  pose_ = {p.x, p.y, NormalizeAngle(p.theta)};
+  // Put down at rest: the wheels start again from standstill, out of any contact.
+  vl_ = vr_ = 0;
+  blocked_ = false;
+  in_contact_ = false;
+  bumpers_ = 0;
+}
+
 double SimController::Clearance(const Pose2& p, uint8_t* bumpers) const {
   double best = 1e9;
   Vec2 contact{};

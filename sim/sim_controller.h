@@ -38,6 +38,10 @@ class SimController {
 
   // A frame from the bus (wheel commands; everything else is ignored).
   void HandleFrame(const can_frame& frame);
+  // The robot is lifted and put down at p (world frame; the kidnap fault,
+  // sim/faults.h): the true pose jumps, the wheels do not turn for the jump, so
+  // the encoders (and the truth file's dead reckoning) count no motion for it.
+  void Teleport(const Pose2& p);
   // Advances the simulation to robot time t, appending the frames sent meanwhile.
   void AdvanceTo(double t, std::vector<can_frame>* out);
 

@@ -30,15 +30,41 @@ struct InProcessRun {
   double wall_s = 0;
 };
 
+// What a run starts from besides the world (irslam-sim run --map-in; the
+// relocalisation evaluation).
+struct RunSetup {
+  // Handed to the core before the start (RobotCore::SetSavedMap): the mission
+  // relocalises in it first (issue 14).
+  std::optional<robot::MapSnapshot> saved_map;
+  // Checked after every control period (after on_tick): true ends the run there.
+  std::function<bool(const InProcessRun&)> stop_when;
+};
+
 // Runs until the mission is done or idle again, or max_time_s of robot time.
 // on_tick (optional) is called after every control period. work_clock: what
 // the work per period (run.profile) is measured with (default: the monotonic clock).
+// Kidnap faults teleport the simulated robot when their time comes.
 InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options, uint64_t seed,
                           double max_time_s,
                           const std::function<void(const InProcessRun&)>& on_tick = nullptr,
                           const FaultSpec* faults = nullptr,
                           robot::WorkClockNs work_clock = nullptr,
                           const std::optional<robot::MapSnapshot>& saved_map = std::nullopt);
+// The same with a RunSetup: its saved_map, and stop_when to end the run early.
+InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options, uint64_t seed,
+                          double max_time_s, const std::function<void(const InProcessRun&)>& on_tick,
+                          const FaultSpec* faults, robot::WorkClockNs work_clock, const RunSetup& setup);
+
+// Whether p is a pose the robot can be put at in the world: inside the room,
+// outside every box, its centre at least clearance_m from every wall and box
+// side. Otherwise false and a one-line *why ("(1.00, 9.00) lies outside the
+// room", "... lies inside object 2 [0.0, 2.0, 0.6, 3.2]", "... is 0.12 m from
+// a wall or object side (at least 0.20 m needed)").
+bool FreePose(const World& world, const Pose2& p, double clearance_m, std::string* why);
+
+// "X,Y,THETA" (irslam-sim run --start): three finite numbers, theta normalised;
+// else nullopt and a one-line *why.
+std::optional<Pose2> ParsePoseArg(const std::string& text, std::string* why);
 
 }  // namespace irslam::sim
 

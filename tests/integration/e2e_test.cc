@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <boost/crc.hpp>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -460,6 +461,70 @@ TEST_F(E2eTest, WholeMissionOverTheBusEndsDoneWithTheRoomModelled) {
   EXPECT_LE(truth["collisions"].get<int>(), 1) << "contacts [t, x, y]: " << truth["collision_points"].dump();
 }
 
+// Issue 14 through the real processes: the map an earlier run left in the state
+// directory (made here by irslam-sim run, stored as irslamd stores it) is loaded
+// at start; `start` relocalises in it and the mission goes on in its frame with
+// its ids; `start --fresh` explores from nothing instead.
+TEST_F(E2eTest, ARestartedDaemonRelocalisesInTheSavedMap) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "relocalisation quality is judged in the uninstrumented build";
+#endif
+  std::string out;
+  ASSERT_EQ(RunCommand({kSim, "run", "--world", kSrc + "/tests/worlds/fig14.json", "--map-out", dir_ + "/day1.json"},
+                       &out, 120),
+            0)
+      << out;
+  std::string error;
+  const auto day1 = ParseJsonText(testing::ReadFile(dir_ + "/day1.json"), &error);
+  ASSERT_TRUE(day1) << error;
+  {
+    // daemon/map_store.h's file: the map with its CRC-32.
+    boost::crc_32_type crc;
+    const std::string body = day1->dump();
+    crc.process_bytes(body.data(), body.size());
+    char hex[9];
+    std::snprintf(hex, sizeof hex, "%08x", crc.checksum());
+    std::filesystem::create_directories(StateDir());
+    std::ofstream(StateDir() + "/map.json")
+        << nlohmann::json{{"format", "irslam-map"}, {"version", 1}, {"seq", 7}, {"reason", "stop"},
+                          {"map", *day1}, {"crc32", hex}}.dump() << "\n";
+  }
+  StartOptions o;
+  o.world = "fig14.json";
+  StartAll(o);
+  EXPECT_EQ(Status().value()["map_store"]["seq"], 7);
+  EXPECT_NE(testing::ReadFile(dir_ + "/daemon.log").find("the next start relocalises in the saved map"),
+            std::string::npos);
+  ASSERT_EQ(Ctl({"start"}, &out), 0) << out;
+  bool relocalising = false, committed = false;
+  const auto end = Clock::now() + std::chrono::duration<double>(WallS(60));
+  while (Clock::now() < end && !committed) {
+    const auto s = Status().value();
+    relocalising |= s["state"] == "relocalize";
+    committed = s.contains("relocalize") && s["relocalize"]["committed"] == true;
+    Sleep(0.05);
+  }
+  EXPECT_TRUE(relocalising);
+  ASSERT_TRUE(committed) << Status().value().dump();
+  WaitRobotTime(Status().value()["robot_time"].get<double>() + 5);
+  ASSERT_EQ(Ctl({"map", "--out", dir_ + "/day2.json"}, &out), 0) << out;
+  const auto day2 = ParseJsonText(testing::ReadFile(dir_ + "/day2.json"), &error);
+  ASSERT_TRUE(day2) << error;
+  EXPECT_TRUE((*day2)["relocalized"].is_object()) << (*day2).dump().substr(0, 400);
+  std::set<int> ids;
+  for (const auto& l : (*day2)["lines"]) ids.insert(l["id"].get<int>());
+  size_t kept = 0;
+  for (const auto& l : (*day1)["lines"]) kept += ids.count(l["id"].get<int>());
+  EXPECT_GE(kept, (*day1)["lines"].size() * 3 / 4) << "the saved map's line ids";
+  ASSERT_EQ(Ctl({"stop"}, &out), 0) << out;
+  // Fresh: explores from nothing.
+  ASSERT_EQ(Ctl({"start", "--fresh"}, &out), 0) << out;
+  WaitRobotTime(Status().value()["robot_time"].get<double>() + 1);
+  const auto s = Status().value();
+  EXPECT_EQ(s["state"], "wall_follow") << s.dump().substr(0, 400);
+  ASSERT_EQ(Ctl({"stop"}, &out), 0) << out;
+}
+
 TEST_F(E2eTest, SighupReloadsAGoodConfigAndKeepsTheOldOneOnABadOne) {
   StartOptions o;
   o.world = "fig14.json";
@@ -775,6 +840,58 @@ TEST(CommandLineTest, BadConfigAndWorldFilesGiveOneLineAndStatus2) {
     EXPECT_EQ(out.rfind(c.want, 0), 0u) << out;
     EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
   }
+  std::filesystem::remove_all(dir);
+}
+
+// Issue 14: irslam-sim run --map-in, --start and the kidnap fault's target are
+// checked before the run, each in one line with status 2; good ones run.
+TEST(CommandLineTest, SimRunMapInStartAndKidnapAreCheckedInOneLine) {
+  const std::string dir = testing::MakeTempDir();
+  const std::string world = std::string(IRSLAM_SOURCE_DIR) + "/tests/worlds/fig14.json";
+  const std::string golden = std::string(IRSLAM_SOURCE_DIR) + "/tests/unit/testdata/core_map.golden.json";
+  {
+    std::ofstream(dir + "/bad_map.json") << R"({"frame": "map", "state": "done", "lines": [{"id": 1}], "objects": []})";
+    std::ofstream(dir + "/not_json.json") << R"({"frame": )";
+  }
+  const auto run = [&](std::vector<std::string> extra) {
+    std::vector<std::string> argv = {kSim, "run", "--world", world, "--max-time", "2"};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    return argv;
+  };
+  const struct {
+    std::vector<std::string> argv;
+    std::string want;
+  } cases[] = {
+      {run({"--start", "1,2"}),
+       "irslam-sim: --start 1,2: expected X,Y,THETA (three numbers: metres, metres, radians), got '1,2'\n"},
+      {run({"--start", "9,1,0"}), "irslam-sim: --start 9,1,0: (9.00, 1.00) lies outside the room\n"},
+      {run({"--start", "0.3,2.5,0"}),
+       "irslam-sim: --start 0.3,2.5,0: (0.30, 2.50) lies inside object 1 [0.00, 2.00, 0.60, 3.20]\n"},
+      {run({"--start", "3.95,1,0"}), "irslam-sim: --start 3.95,1,0: (3.95, 1.00) is 0.05 m from a wall or object side"},
+      {run({"--faults", "kidnap:at=5:x=1.8:y=1.5"}),
+       "irslam-sim: --faults: kidnap at 5 s: (1.80, 1.50) lies inside object 2 [1.40, 1.20, 2.20, 1.80]\n"},
+      {run({"--map-in", dir + "/missing.json"}),
+       "irslam-sim: --map-in " + dir + "/missing.json: cannot read " + dir + "/missing.json"},
+      {run({"--map-in", dir + "/not_json.json"}), "irslam-sim: --map-in " + dir + "/not_json.json: not valid JSON"},
+      {run({"--map-in", dir + "/bad_map.json"}),
+       "irslam-sim: --map-in " + dir + "/bad_map.json: map.lines[0].rho: missing\n"},
+  };
+  for (const auto& c : cases) {
+    std::string out;
+    EXPECT_EQ(RunCommand(c.argv, &out), 2) << c.want;
+    EXPECT_EQ(out.rfind(c.want, 0), 0u) << out;
+    EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
+  }
+  // Good ones: the run goes ahead (2 s: not done, status 1, a map written).
+  std::string out;
+  EXPECT_EQ(RunCommand(run({"--map-in", golden, "--start", "3,0.8,1.5", "--faults", "kidnap:at=1:x=3:y=4.8",
+                            "--map-out", dir + "/out.json"}),
+                       &out),
+            1)
+      << out;
+  EXPECT_NE(out.find("--max-time reached"), std::string::npos) << out;
+  EXPECT_NE(out.find("\"kidnapped\":1"), std::string::npos) << out;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/out.json"));
   std::filesystem::remove_all(dir);
 }
 

@@ -1,6 +1,7 @@
 // irslam-report: the accuracy report over the paper's scenarios (docs/accuracy.md
 // and its SVG figures). Runs every world in process with several seeds.
 //   irslam-report [--worlds DIR] [--seeds N] [--out DIR]
+//   irslam-report --reloc N [--reloc-worlds fig14,fig16] [--out DIR]   (relocalization-results.md)
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -16,6 +17,7 @@
 #include "tests/tools/campaign.h"
 #include "tests/tools/clean_report.h"
 #include "tests/tools/metrics.h"
+#include "tests/tools/reloc_eval.h"
 #include "tests/tools/svg_chart.h"
 
 namespace irslam::report {
@@ -155,6 +157,40 @@ int RunCampaignReport(const robot::CoreOptions& options, const std::string& prof
   return 0;
 }
 
+// Issue 14: relocalisation in a saved map (tests/tools/reloc_eval.h); writes
+// relocalization-results.md in out_dir.
+int RunRelocReport(const robot::CoreOptions& options, const std::string& worlds_dir, const std::string& names,
+                   int runs, uint64_t seed, const std::string& out_dir) {
+  metrics::RelocOptions ro;
+  ro.runs = runs;
+  ro.seed = seed;
+  std::vector<metrics::RelocWorld> results;
+  std::stringstream list(names);
+  for (std::string name; std::getline(list, name, ',');) {
+    std::string error;
+    auto w = sim::LoadWorldFile(worlds_dir + "/" + name + ".json", &error);
+    if (!w) {
+      std::fprintf(stderr, "irslam-report: %s\n", error.c_str());
+      return 2;
+    }
+    results.push_back(metrics::EvaluateRelocalization(*w, options, ro));
+    int committed = 0;
+    for (const auto& r : results.back().runs) committed += r.committed;
+    std::fprintf(stderr, "irslam-report: %s: map %s (%d lines), %d/%zu runs committed\n", name.c_str(),
+                 results.back().map_done ? "done" : "not done", results.back().map_lines, committed,
+                 results.back().runs.size());
+  }
+  const std::string command = "irslam-report --reloc " + std::to_string(runs) + " --reloc-worlds " + names +
+                              " --first-seed " + std::to_string(seed);
+  const std::string path = out_dir + "/relocalization-results.md";
+  if (!Write(path, metrics::RelocMarkdown(results, ro, command))) {
+    std::fprintf(stderr, "irslam-report: cannot write %s\n", path.c_str());
+    return 1;
+  }
+  std::fprintf(stderr, "irslam-report: wrote %s\n", path.c_str());
+  return 0;
+}
+
 }  // namespace
 }  // namespace irslam::report
 
@@ -185,6 +221,13 @@ int main(int argc, char** argv) {
                  "clean: the cleaning report instead (cleaning-results.md, cleaning-coverage.svg in --out): the "
                  "paper worlds x --seeds, plus --campaign N generated worlds per profile; docs/cleaning.md")
       ->check(CLI::IsMember({"explore", "clean"}));
+  int reloc_runs = 0;
+  std::string reloc_worlds = "fig14,fig16,fig17,fig18,fig19,fig20,free_start,corner_start";
+  app.add_option("--reloc", reloc_runs,
+                 "Instead of the accuracy report: relocalisation in a saved map, this many runs from random start "
+                 "poses per world (relocalization-results.md in --out; docs/relocalization.md)")
+      ->check(CLI::Range(1, 1000));
+  app.add_option("--reloc-worlds", reloc_worlds, "--reloc: the worlds (names in --worlds), comma-separated");
   CLI11_PARSE(app, argc, argv);
   robot::CoreOptions defaults = robot::DefaultCoreOptions();
   if (!config_path.empty()) {
@@ -195,6 +238,7 @@ int main(int argc, char** argv) {
     }
   }
 
+  if (reloc_runs > 0) return RunRelocReport(defaults, worlds_dir, reloc_worlds, reloc_runs, first_seed, out_dir);
   if (mode == "clean") {
     return RunCleanReport(defaults, worlds_dir,
                           {"fig14", "fig16", "fig17", "fig18", "fig19", "fig20", "free_start", "corner_start"},

@@ -10,8 +10,11 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
+#include "daemon/core_json.h"
 #include "daemon/irslamd.h"
+#include "daemon/map_store.h"
 #include "sim/sim_run.h"
 #include "tests/testing/process.h"
 #include "tests/testing/worlds.h"
@@ -68,19 +71,21 @@ class DaemonMissionTest : public ::testing::Test {
   }
   // Hands a request to the daemon as this process; *reply is set when it answers
   // (a stop's answer waits for the map writer thread's outcome, posted onto io_).
-  void Send(const std::string& method, int id, nlohmann::json* reply) {
+  void Send(const std::string& method, int id, nlohmann::json* reply,
+            nlohmann::json params = nlohmann::json::object()) {
     rpc::Request r;
     r.id = id;
     r.method = method;
+    r.params = std::move(params);
     PeerCred self;
     self.uid = ::getuid();
     self.gid = ::getgid();
     self.groups = {::getgid()};
     daemon_->Handle(r, self, [reply](nlohmann::json j) { *reply = std::move(j); });
   }
-  nlohmann::json Call(const std::string& method) {
+  nlohmann::json Call(const std::string& method, nlohmann::json params = nlohmann::json::object()) {
     nlohmann::json reply;
-    Send(method, 1, &reply);
+    Send(method, 1, &reply, std::move(params));
     while (reply.is_null()) io_.run_one();
     return reply;
   }
@@ -329,6 +334,97 @@ TEST_F(DaemonMissionTest, AStallGraceLastsOneTickSoASlowLoopStillFindsADeadContr
   EXPECT_EQ(s["state"], "fault");
   EXPECT_EQ(s["reason"], "controller lost: encoder frames timed out");
   EXPECT_EQ(s["period"]["loop_stalls"], 1);
+}
+
+// Issue 14: the map the next start relocalises in.
+nlohmann::json GoldenMap() {
+  std::ifstream in(std::string(IRSLAM_SOURCE_DIR) + "/tests/unit/testdata/core_map.golden.json");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return nlohmann::json::parse(ss.str());
+}
+
+void WriteStateMap(const std::string& dir, const nlohmann::json& map) {
+  std::string error;
+  ASSERT_TRUE(MapStore(dir).Save({4, "stop", map}, &error)) << error;
+}
+
+// The saved map on disk goes to the core at start (and to the core a reload
+// makes); start {"fresh": true} forgets it; a mission stopped before it modelled
+// the room leaves its map saved but not one to relocalise in.
+TEST_F(DaemonMissionTest, TheSavedMapGoesToTheCoreAndFreshForgetsIt) {
+  const nlohmann::json golden = GoldenMap();
+  WriteStateMap(settings_.state_dir, golden);
+  Open();
+  ASSERT_TRUE(daemon_->core().saved_map());
+  EXPECT_EQ(ToJson(*daemon_->core().saved_map()), golden);  // all of it, exactly
+  std::ofstream(options_.config_path) << R"({"control": {"period_s": 0.02}})";
+  daemon_->Reload();
+  ASSERT_TRUE(daemon_->core().saved_map());  // the new core has it too
+  EXPECT_EQ(daemon_->core().saved_map()->lines.size(), golden["lines"].size());
+  Run(1);
+  // A start that is rejected forgets nothing.
+  const auto bad = Call("start", {{"fresh", true}, {"mode", "mop"}});
+  ASSERT_TRUE(bad.contains("error")) << bad;
+  EXPECT_TRUE(daemon_->core().saved_map());
+  const auto started = Call("start", {{"fresh", true}});
+  ASSERT_TRUE(started.contains("result")) << started;
+  EXPECT_FALSE(daemon_->core().saved_map());
+  EXPECT_FALSE(daemon_->saved_map());
+  Run(10);
+  ASSERT_EQ(Call("stop")["result"]["map"], "saved");
+  Run(0.1);
+  // 10 s of wall following: saved (the file is replaced) but no room model.
+  EXPECT_FALSE(daemon_->core().saved_map());
+  std::string error;
+  auto saved = MapStore(settings_.state_dir).Load(&error);
+  ASSERT_TRUE(saved) << error;
+  EXPECT_EQ(saved->seq, 5u);
+  EXPECT_TRUE(saved->map["room"]["box"].is_null());
+  EXPECT_EQ(daemon_->Shutdown(), 0);
+  daemon_.reset();
+  Open();
+  EXPECT_FALSE(daemon_->core().saved_map());
+  EXPECT_TRUE(daemon_->maps().stored());  // still served as the saved map
+}
+
+// A finished mission's map is the next start's saved map (no restart needed).
+TEST_F(DaemonMissionTest, AFinishedMissionsMapIsTheNextStartsSavedMap) {
+  Open();
+  Run(1);
+  ASSERT_TRUE(Call("start").contains("result"));
+  for (int i = 0; i < 90 && daemon_->StatusJson()["state"] != "done"; ++i) Run(10);
+  ASSERT_EQ(daemon_->StatusJson()["state"], "done");
+  Run(0.1);
+  ASSERT_TRUE(daemon_->core().saved_map());
+  EXPECT_TRUE(daemon_->core().saved_map()->room.box);
+  const nlohmann::json served = Call("map")["result"];
+  EXPECT_EQ(ToJson(*daemon_->core().saved_map())["objects"], served["objects"]);
+  EXPECT_EQ(daemon_->core().saved_map()->lines.size(), served["lines"].size());
+}
+
+// A map file that checks out (checksum, types) but does not make a map (two
+// lines with one id) is set aside; the daemon starts without it.
+TEST_F(DaemonMissionTest, ASavedMapThatDoesNotParseIsSetAsideAndTheDaemonStarts) {
+  nlohmann::json bad = GoldenMap();
+  bad["lines"][1]["id"] = bad["lines"][0]["id"];
+  WriteStateMap(settings_.state_dir, bad);
+  ::testing::internal::CaptureStderr();
+  Open();
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  EXPECT_NE(log.find("<3>irslamd: map: " + settings_.state_dir + "/map.json: map.lines[1].id: line 1 is in the map "
+                     "twice; kept aside as " + settings_.state_dir + "/map.json.bad, not used\n"),
+            std::string::npos)
+      << log;
+  EXPECT_TRUE(std::filesystem::exists(settings_.state_dir + "/map.json.bad"));
+  EXPECT_FALSE(std::filesystem::exists(settings_.state_dir + "/map.json"));
+  EXPECT_FALSE(daemon_->core().saved_map());
+  EXPECT_FALSE(daemon_->maps().stored());
+  EXPECT_EQ(daemon_->StatusJson()["map_store"]["saved_map"], false);
+  Run(1);
+  ASSERT_TRUE(Call("start").contains("result"));
+  Run(1);
+  EXPECT_EQ(daemon_->StatusJson()["state"], "wall_follow");
 }
 
 }  // namespace

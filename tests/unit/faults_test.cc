@@ -2,8 +2,13 @@
 // each fault does to the controller's frames.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "proto/codec.h"
+#include "robot/robot_core.h"
 #include "sim/faults.h"
+#include "sim/sim_run.h"
 
 namespace irslam::sim {
 namespace {
@@ -155,6 +160,120 @@ TEST(FaultInjectorTest, LossDuplicateReorderAndDelayAtTheirRates) {
   int out_of_order = 0;
   for (size_t i = 1; i < out.size(); ++i) out_of_order += AsEnc(out[i]).timestamp_ms < AsEnc(out[i - 1]).timestamp_ms;
   EXPECT_GT(out_of_order, 0.05 * n);
+}
+
+}  // namespace
+}  // namespace irslam::sim
+
+namespace irslam::sim {
+namespace {
+
+TEST(FaultSpecTest, KidnapIsParsedFromItsTableInTimeOrder) {
+  std::string error;
+  auto f = ParseFaultSpec("kidnap:at=60:x=1.5:y=2:theta=4,kidnap:at=30:x=3:y=1", &error);
+  ASSERT_TRUE(f) << error;
+  EXPECT_TRUE(f->any());
+  ASSERT_EQ(f->kidnap.size(), 2u);
+  EXPECT_DOUBLE_EQ(f->kidnap[0].at, 30);
+  EXPECT_DOUBLE_EQ(f->kidnap[0].to.x, 3);
+  EXPECT_DOUBLE_EQ(f->kidnap[0].to.theta, 0);
+  EXPECT_DOUBLE_EQ(f->kidnap[1].to.theta, 4 - 2 * M_PI);  // normalised
+  const std::pair<const char*, const char*> cases[] = {
+      {"kidnap:at=1:x=2", "faults: 'kidnap:at=1:x=2': needs y="},
+      {"kidnap:x=1:y=2", "faults: 'kidnap:x=1:y=2': needs at="},
+      {"kidnap:at=1:x=2:y=3:z=0", "faults: 'kidnap:at=1:x=2:y=3:z=0': unknown key 'z'"},
+      {"kidnap:at=1:x=2e4:y=3", "faults: 'kidnap:at=1:x=2e4:y=3': x must be in [-1000, 1000] (got 20000)"},
+      {"kidnap:at=1:x=2:y=a", "faults: 'kidnap:at=1:x=2:y=a': y must be a number"},
+  };
+  for (const auto& [spec, want] : cases) {
+    EXPECT_FALSE(ParseFaultSpec(spec, &error)) << spec;
+    EXPECT_EQ(error, want) << spec;
+  }
+}
+
+TEST(FaultInjectorTest, EachKidnapIsTakenOnceWhenItsTimeComes) {
+  std::string error;
+  FaultInjector inj(*ParseFaultSpec("kidnap:at=2:x=1:y=1,kidnap:at=2.5:x=2:y=2:theta=1", &error), 1);
+  EXPECT_FALSE(inj.TakeKidnap(1.99));
+  const auto first = inj.TakeKidnap(2.0);
+  ASSERT_TRUE(first);
+  EXPECT_DOUBLE_EQ(first->x, 1);
+  EXPECT_FALSE(inj.TakeKidnap(2.1));
+  const auto second = inj.TakeKidnap(9);
+  ASSERT_TRUE(second);
+  EXPECT_DOUBLE_EQ(second->theta, 1);
+  EXPECT_FALSE(inj.TakeKidnap(10));
+  EXPECT_EQ(inj.counters().kidnapped, 2u);
+}
+
+// In a whole in-process run: after the kidnap time the true pose is the target
+// (give or take what the robot drove since), and the encoders never jump: the
+// counts per 10 ms frame stay what the wheels' top speed allows.
+TEST(KidnapTest, TheTruePoseJumpsAndTheEncodersDoNot) {
+  std::string error;
+  auto world = LoadWorldFile(std::string(IRSLAM_SOURCE_DIR) + "/tests/worlds/fig14.json", &error);
+  ASSERT_TRUE(world) << error;
+  auto faults = ParseFaultSpec("kidnap:at=8:x=3.2:y=4.8:theta=-2", &error);
+  ASSERT_TRUE(faults) << error;
+  const robot::CoreOptions o = robot::DefaultCoreOptions();
+  const double max_counts_per_frame =
+      o.slam.geometry.max_wheel_speed_mps * 0.010 / o.slam.geometry.metres_per_count() + 2;
+  Pose2 before_jump, after_jump;
+  bool seen_before = false, seen_after = false;
+  const auto on_tick = [&](const InProcessRun& r) {
+    if (r.t < 8 - 1e-9) before_jump = r.sim->true_pose(), seen_before = true;
+    if (!seen_after && r.t >= 8 + 1e-9) after_jump = r.sim->true_pose(), seen_after = true;
+  };
+  const InProcessRun run = RunInProcess(*world, o, 1, 8.5, on_tick, &*faults);
+  ASSERT_TRUE(run.error.empty()) << run.error;
+  ASSERT_TRUE(seen_before && seen_after);
+  EXPECT_EQ(run.faults->counters().kidnapped, 1u);
+  EXPECT_GT(std::hypot(before_jump.x - 3.2, before_jump.y - 4.8), 1.0);
+  EXPECT_NEAR(after_jump.x, 3.2, 0.02);
+  EXPECT_NEAR(after_jump.y, 4.8, 0.02);
+  EXPECT_NEAR(after_jump.theta, -2, 0.05);
+  // The truth file: the true trajectory jumps once, dead reckoning never.
+  const nlohmann::json truth = run.sim->Truth();
+  double true_jump = 0, odom_jump = 0;
+  for (size_t i = 1; i < truth["trajectory"].size(); ++i) {
+    const auto &a = truth["trajectory"][i - 1], &b = truth["trajectory"][i];
+    true_jump = std::max(true_jump, std::hypot(b[1].get<double>() - a[1].get<double>(),
+                                               b[2].get<double>() - a[2].get<double>()));
+    const auto &c = truth["odometry"][i - 1], &d = truth["odometry"][i];
+    odom_jump = std::max(odom_jump, std::hypot(d[1].get<double>() - c[1].get<double>(),
+                                               d[2].get<double>() - c[2].get<double>()));
+  }
+  EXPECT_GT(true_jump, 1.0);
+  EXPECT_LT(odom_jump, 0.05);  // 50 ms at most 0.5 m/s
+  // The encoder frames themselves: a simulator driven straight at 0.3 m/s,
+  // kidnapped at 2 s. Per 10 ms frame the counts move by what the wheels turn.
+  SimController sim(*world, SimOptionsFrom(o), 1);
+  FaultInjector inj(*ParseFaultSpec("kidnap:at=2:x=1:y=4.8:theta=0", &error), 1);
+  std::vector<can_frame> frames;
+  std::optional<proto::EncoderCounts> last;
+  int64_t max_step = 0, total = 0;
+  for (int i = 1; i <= 2000; ++i) {  // 4 s
+    const double t = 0.002 * i;
+    if (i % 10 == 0) sim.HandleFrame(proto::Encode(proto::WheelCmd{{0.3, 0.3, true}, 0}));
+    while (const auto to = inj.TakeKidnap(t)) sim.Teleport(*to);
+    frames.clear();
+    sim.AdvanceTo(t, &frames);
+    for (const can_frame& f : frames) {
+      const auto d = proto::Decode(f);
+      if (const auto* e = std::get_if<proto::EncoderCounts>(&d.message)) {
+        if (last) {
+          const int64_t step = static_cast<int16_t>(static_cast<uint16_t>(e->left - last->left));
+          max_step = std::max(max_step, std::abs(step));
+          total += step;
+        }
+        last = *e;
+      }
+    }
+  }
+  EXPECT_NEAR(sim.true_pose().x, 1 + 2 * 0.3 - 0.03, 0.05);  // driven on from the target (from standstill)
+  EXPECT_NEAR(sim.true_pose().y, 4.8, 0.05);
+  EXPECT_GT(total, 0);
+  EXPECT_LE(static_cast<double>(max_step), max_counts_per_frame);
 }
 
 }  // namespace

@@ -1,0 +1,332 @@
+#include "tests/tools/reloc_eval.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include "sim/sim_run.h"
+
+namespace irslam::metrics {
+namespace {
+
+constexpr double kDeg = 180.0 / M_PI;
+
+std::vector<TimedPose> Poses(const nlohmann::json& arr) {
+  std::vector<TimedPose> out;
+  for (const auto& p : arr) out.push_back({p[0], {p[1], p[2], p[3]}});
+  return out;
+}
+
+std::string F(double v, int prec = 1) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.*f", prec, v);
+  return b;
+}
+
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const double at = q * static_cast<double>(v.size() - 1);
+  const auto lo = static_cast<size_t>(std::floor(at));
+  const size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (v[hi] - v[lo]) * (at - static_cast<double>(lo));
+}
+
+bool Wrong(const PoseError& e, const RelocOptions& ro) {
+  return e.position_m > ro.wrong_position_m || e.heading_rad > ro.wrong_heading_rad;
+}
+
+PoseError Max(const PoseError& a, const PoseError& b) {
+  return {std::max(a.position_m, b.position_m), std::max(a.heading_rad, b.heading_rad)};
+}
+
+RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options,
+                const robot::MapSnapshot& saved, const Pose2& map_to_world, const Pose2& start,
+                uint64_t seed, const RelocOptions& ro) {
+  RelocRun r;
+  r.start = start;
+  r.seed = seed;
+  sim::World world = base;
+  world.start = start;
+  sim::RunSetup setup;
+  setup.saved_map = saved;
+  double wrong_since = -1;
+  bool first_after_commit = true;
+  const auto on_tick = [&](const sim::InProcessRun& run) {
+    // Every period: a commit can be followed by done within a period or two
+    // (nothing left to model), and the run ends there.
+    const robot::CoreStatus st = run.core->Status(run.t);
+    if (!st.relocalize) return;
+    const bool committed = st.relocalize->committed;
+    if (committed && !r.committed) {
+      r.committed = true;
+      r.commit_t = st.relocalize->committed_t > 0 ? st.relocalize->committed_t : run.t;
+      r.relocalize_s = r.commit_t - st.relocalize->started_t;
+      r.hypotheses = st.relocalize->hypotheses;
+    }
+    r.attempts = st.relocalize->attempts;
+    if (!r.committed) return;
+    const PoseError e = ErrorInWorld(st.slam.pose, map_to_world, run.sim->true_pose());
+    if (first_after_commit) {
+      r.at_commit = e;
+      first_after_commit = false;
+    }
+    if (run.t >= r.commit_t + 5) {
+      r.max_after = Max(r.max_after, e);
+      r.after_sampled = true;
+    }
+    r.final_error = e;
+    // Confidently wrong: committed and off for recover_s in a row (a return to
+    // relocalising, or the error shrinking, ends the episode).
+    if (committed && Wrong(e, ro)) {
+      if (wrong_since < 0) wrong_since = run.t;
+      if (run.t - wrong_since >= ro.recover_s) r.confidently_wrong = true;
+    } else {
+      wrong_since = -1;
+    }
+  };
+  setup.stop_when = [&](const sim::InProcessRun& run) {
+    return r.committed && run.t >= r.commit_t + ro.after_commit_s;
+  };
+  robot::CoreOptions o = options;
+  if (saved.calibration) o.slam.initial_calibration = saved.calibration;
+  const sim::InProcessRun run =
+      sim::RunInProcess(world, o, seed, ro.max_time_s, on_tick, nullptr, nullptr, setup);
+  r.end_state =
+      run.error.empty() ? control::ToString(run.core->state()) : "not started: " + run.error;
+  r.end_t = run.t;
+  const robot::MapSnapshot out = run.core->Map();
+  if (!r.committed && out.relocalized) {
+    // Committed after the last period's status (cannot be scored for error).
+    r.committed = true;
+    r.commit_t = out.relocalized->t;
+    r.hypotheses = out.relocalized->hypotheses;
+  }
+  r.saved_lines = static_cast<int>(saved.lines.size());
+  r.kept_ids = KeptLineIds(saved.lines, out.lines);
+  r.duplicates = DuplicateLines(saved.lines, out.lines);
+  // Still off when the run ended (done, or the time limit): never recovered.
+  if (wrong_since >= 0) r.confidently_wrong = true;
+  r.correct = r.committed && !r.confidently_wrong && !Wrong(r.final_error, ro);
+  return r;
+}
+
+}  // namespace
+
+Pose2 FitRigid(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
+               double* rms_m) {
+  const size_t n = std::min(from.size(), to.size());
+  if (rms_m) *rms_m = 0;
+  if (n < 2) return {};
+  Eigen::Vector2d ca = Eigen::Vector2d::Zero(), cb = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < n; ++i) {
+    ca += from[i];
+    cb += to[i];
+  }
+  ca /= static_cast<double>(n);
+  cb /= static_cast<double>(n);
+  double sxx = 0, sxy = 0, syx = 0, syy = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d a = from[i] - ca, b = to[i] - cb;
+    sxx += a.x() * b.x();
+    sxy += a.x() * b.y();
+    syx += a.y() * b.x();
+    syy += a.y() * b.y();
+  }
+  const double theta = std::atan2(sxy - syx, sxx + syy);
+  const Eigen::Matrix2d rot = Eigen::Rotation2Dd(theta).toRotationMatrix();
+  const Eigen::Vector2d t = cb - rot * ca;
+  if (rms_m) {
+    double sum = 0;
+    for (size_t i = 0; i < n; ++i) sum += (rot * from[i] + t - to[i]).squaredNorm();
+    *rms_m = std::sqrt(sum / static_cast<double>(n));
+  }
+  return {t.x(), t.y(), NormalizeAngle(theta)};
+}
+
+Pose2 MapToWorldFit(const std::vector<TimedPose>& map_traj, const std::vector<TimedPose>& truth,
+                    double* rms_m, double max_dt_s) {
+  std::vector<Eigen::Vector2d> from, to;
+  size_t j = 0;
+  for (const TimedPose& m : map_traj) {
+    while (j + 1 < truth.size() && std::abs(truth[j + 1].t - m.t) <= std::abs(truth[j].t - m.t))
+      ++j;
+    if (truth.empty() || std::abs(truth[j].t - m.t) > max_dt_s) continue;
+    from.emplace_back(m.pose.x, m.pose.y);
+    to.emplace_back(truth[j].pose.x, truth[j].pose.y);
+  }
+  return FitRigid(from, to, rms_m);
+}
+
+PoseError ErrorInWorld(const Pose2& map_pose, const Pose2& map_to_world, const Pose2& truth) {
+  const Pose2 w = Compose(map_to_world, map_pose);
+  return {std::hypot(w.x - truth.x, w.y - truth.y),
+          std::abs(NormalizeAngle(w.theta - truth.theta))};
+}
+
+int KeptLineIds(const std::vector<slam::LineFeature>& saved,
+                const std::vector<slam::LineFeature>& out) {
+  std::set<int> ids;
+  for (const auto& l : out) ids.insert(l.id);
+  int kept = 0;
+  for (const auto& l : saved) kept += ids.count(l.id) > 0;
+  return kept;
+}
+
+int DuplicateLines(const std::vector<slam::LineFeature>& saved,
+                   const std::vector<slam::LineFeature>& out, double dist_m, double angle_rad) {
+  std::set<int> saved_ids;
+  for (const auto& l : saved) saved_ids.insert(l.id);
+  int duplicates = 0;
+  for (const auto& n : out) {
+    if (saved_ids.count(n.id) || n.length() <= 0) continue;
+    const Eigen::Vector2d nd = (n.p1 - n.p0).normalized();
+    for (const auto& s : saved) {
+      const double len = s.length();
+      if (len <= 0) continue;
+      const Eigen::Vector2d d = (s.p1 - s.p0) / len;
+      const double angle = std::acos(std::min(1.0, std::abs(d.dot(nd))));  // undirected
+      if (angle > angle_rad) continue;
+      const Eigen::Vector2d normal(-d.y(), d.x());
+      if (std::abs(normal.dot(n.p0 - s.p0)) > dist_m || std::abs(normal.dot(n.p1 - s.p0)) > dist_m)
+        continue;
+      const double a = d.dot(n.p0 - s.p0), b = d.dot(n.p1 - s.p0);
+      if (std::max(a, b) <= 0 || std::min(a, b) >= len) continue;  // beyond its ends
+      ++duplicates;
+      break;
+    }
+  }
+  return duplicates;
+}
+
+std::vector<Pose2> RandomFreeStarts(const sim::World& world, int n, double clearance_m,
+                                    uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const sim::Box b = world.Bounds();
+  std::uniform_real_distribution<double> ux(b.xmin, b.xmax), uy(b.ymin, b.ymax), uth(-M_PI, M_PI);
+  std::vector<Pose2> out;
+  std::string why;
+  for (int tries = 0; static_cast<int>(out.size()) < n && tries < 1000 * n; ++tries) {
+    const double x = ux(rng), y = uy(rng), th = uth(rng);
+    const Pose2 p{x, y, th};
+    if (sim::FreePose(world, p, clearance_m, &why)) out.push_back(p);
+  }
+  return out;
+}
+
+RelocWorld EvaluateRelocalization(const sim::World& world, const robot::CoreOptions& options,
+                                  const RelocOptions& ro) {
+  RelocWorld w;
+  w.world = world.name;
+  // The map: one exploration mission from the world's start.
+  robot::CoreOptions explore = options;
+  explore.mission.mode = "explore";
+  const sim::InProcessRun first = sim::RunInProcess(world, explore, ro.seed, ro.map_max_time_s);
+  w.map_done = first.core->state() == control::MissionState::kDone;
+  w.map_t = first.t;
+  const robot::MapSnapshot saved = first.core->Map();
+  w.map_lines = static_cast<int>(saved.lines.size());
+  w.map_objects = static_cast<int>(saved.objects.size());
+  w.map_to_world =
+      MapToWorldFit(saved.trajectory, Poses(first.sim->Truth()["trajectory"]), &w.fit_rms_m);
+  const double clearance = options.slam.geometry.radius_m + ro.clearance_extra_m;
+  const std::vector<Pose2> starts =
+      RandomFreeStarts(world, ro.runs, clearance, ro.seed * 7919 + 13);
+  for (size_t i = 0; i < starts.size(); ++i) {
+    w.runs.push_back(RunOne(world, explore, saved, w.map_to_world, starts[i], ro.seed + 1 + i, ro));
+  }
+  return w;
+}
+
+std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOptions& ro,
+                          const std::string& command) {
+  std::ostringstream md;
+  md << "# Relocalisation in a saved map: results\n\n"
+     << "Generated by `" << command
+     << "` (tests/tools/reloc_eval.h; docs/relocalization.md says how to read it). "
+     << "Per world: one exploration mission makes the map (seed " << ro.seed << "), then "
+     << ro.runs
+     << " runs from random free start poses (uniform in the room, at least the robot radius + "
+     << F(ro.clearance_extra_m * 100, 0)
+     << " cm from walls and furniture, uniform heading) start from it, "
+     << "each up to " << F(ro.max_time_s, 0) << " s robot time and ending "
+     << F(ro.after_commit_s, 0)
+     << " s after the commit. Errors are in the world frame through the least-squares fit of the "
+        "first "
+        "mission's map trajectory onto its true trajectory (fit residual below). *Confidently "
+        "wrong*: committed "
+        "more than "
+     << F(ro.wrong_position_m * 100, 0) << " cm / " << F(ro.wrong_heading_rad * kDeg, 0)
+     << "° off and not back within " << F(ro.recover_s, 0)
+     << " s, or still off when the run ended. *Correct*: committed, never confidently wrong, "
+        "within those bounds at the end.\n\n";
+  md << "| world | map | fit rms cm | runs | committed | correct | confidently wrong | time to "
+        "relocalise s median | "
+        "worst | error at commit cm median / max | heading at commit deg max | max error after "
+        "(from commit + 5 s) "
+        "cm / deg | saved ids kept | duplicate lines |\n"
+     << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const RelocWorld& w : worlds) {
+    int committed = 0, correct = 0, wrong = 0, kept = 0, saved = 0, dups = 0;
+    std::vector<double> times, at_commit;
+    double heading_max = 0, after_m = 0, after_deg = 0, at_commit_max = 0;
+    bool any_after = false;
+    for (const RelocRun& r : w.runs) {
+      committed += r.committed;
+      correct += r.correct;
+      wrong += r.confidently_wrong;
+      kept += r.kept_ids;
+      saved += r.saved_lines;
+      dups += r.duplicates;
+      if (!r.committed) continue;
+      times.push_back(r.relocalize_s);
+      at_commit.push_back(r.at_commit.position_m * 100);
+      at_commit_max = std::max(at_commit_max, r.at_commit.position_m * 100);
+      heading_max = std::max(heading_max, r.at_commit.heading_rad * kDeg);
+      if (!r.after_sampled) continue;
+      any_after = true;
+      after_m = std::max(after_m, r.max_after.position_m * 100);
+      after_deg = std::max(after_deg, r.max_after.heading_rad * kDeg);
+    }
+    const size_t n = w.runs.size();
+    const auto pct = [n](int k) { return std::to_string(k) + "/" + std::to_string(n); };
+    const bool any = !times.empty();
+    md << "| " << w.world << " | " << (w.map_done ? "done" : "not done") << ", " << w.map_lines
+       << " lines, " << w.map_objects << " objects | " << F(w.fit_rms_m * 100) << " | " << n
+       << " | " << pct(committed) << " | " << pct(correct) << " | " << wrong << " | "
+       << (any ? F(Quantile(times, 0.5)) : "-") << " | " << (any ? F(Quantile(times, 1.0)) : "-")
+       << " | " << (any ? F(Quantile(at_commit, 0.5)) + " / " + F(at_commit_max) : "-") << " | "
+       << (any ? F(heading_max) : "-") << " | "
+       << (any_after ? F(after_m) + " / " + F(after_deg) : "-") << " | " << kept << "/" << saved
+       << " | " << dups << " |\n";
+  }
+  md << "\n## Every run\n\n"
+     << "| world | seed | start (world) | end | committed at s (time to relocalise) | hypotheses | "
+        "attempts | error at commit cm / deg | "
+        "final error cm / deg | confidently wrong | ids kept | duplicates |\n"
+     << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const RelocWorld& w : worlds) {
+    for (const RelocRun& r : w.runs) {
+      md << "| " << w.world << " | " << r.seed << " | " << F(r.start.x, 2) << ", "
+         << F(r.start.y, 2) << ", " << F(r.start.theta * kDeg, 0) << "° | " << r.end_state << " at "
+         << F(r.end_t) << " s | "
+         << (r.committed ? F(r.commit_t) + " (" + F(r.relocalize_s) + ")" : "-") << " | "
+         << (r.committed ? std::to_string(r.hypotheses) : "-") << " | " << r.attempts << " | "
+         << (r.committed
+                 ? F(r.at_commit.position_m * 100) + " / " + F(r.at_commit.heading_rad * kDeg)
+                 : "-")
+         << " | "
+         << (r.committed
+                 ? F(r.final_error.position_m * 100) + " / " + F(r.final_error.heading_rad * kDeg)
+                 : "-")
+         << " | " << (r.confidently_wrong ? "yes" : "no") << " | " << r.kept_ids << "/"
+         << r.saved_lines << " | " << r.duplicates << " |\n";
+    }
+  }
+  return md.str();
+}
+
+}  // namespace irslam::metrics

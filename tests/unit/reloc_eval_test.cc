@@ -1,0 +1,144 @@
+// The relocalisation evaluation's metric parts (tests/tools/reloc_eval.h) on
+// synthetic data: the map -> world fit, errors through it, kept ids, duplicate
+// lines and the random free start poses.
+#include "tests/tools/reloc_eval.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "sim/sim_run.h"
+
+namespace irslam::metrics {
+namespace {
+
+slam::LineFeature Line(int id, Eigen::Vector2d p0, Eigen::Vector2d p1) {
+  slam::LineFeature l;
+  l.id = id;
+  l.p0 = p0;
+  l.p1 = p1;
+  return l;
+}
+
+TEST(RelocEvalTest, TheRigidFitRecoversAKnownTransformFromANoisyTrajectory) {
+  const Pose2 truth_tf{1.7, -0.4, 2.3};  // map -> world
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0, 0.01);
+  std::vector<TimedPose> map_traj, truth;
+  for (int i = 0; i < 400; ++i) {
+    const double t = 0.25 * i;
+    const Pose2 m{std::cos(0.05 * i) * 1.5 + 0.002 * i, std::sin(0.03 * i) * 2.0, 0.01 * i};
+    map_traj.push_back({t, m});
+    Pose2 w = Compose(truth_tf, m);
+    w.x += noise(rng);
+    w.y += noise(rng);
+    truth.push_back({t, w});
+    truth.push_back({t + 0.05, w});  // the truth is sampled faster; pairs by time
+  }
+  double rms = 0;
+  const Pose2 fit = MapToWorldFit(map_traj, truth, &rms);
+  EXPECT_NEAR(fit.x, truth_tf.x, 0.005);
+  EXPECT_NEAR(fit.y, truth_tf.y, 0.005);
+  EXPECT_NEAR(fit.theta, truth_tf.theta, 0.003);
+  EXPECT_NEAR(rms, 0.01 * std::sqrt(2.0), 0.003);
+  // Exact points: exact transform, zero residual; too few points: identity.
+  const std::vector<Eigen::Vector2d> a = {{0, 0}, {1, 0}, {0, 2}};
+  std::vector<Eigen::Vector2d> b;
+  for (const auto& p : a) b.push_back(Eigen::Rotation2Dd(-0.5) * p + Eigen::Vector2d(3, 4));
+  const Pose2 exact = FitRigid(a, b, &rms);
+  EXPECT_NEAR(exact.theta, -0.5, 1e-12);
+  EXPECT_NEAR(exact.x, 3, 1e-12);
+  EXPECT_NEAR(exact.y, 4, 1e-12);
+  EXPECT_NEAR(rms, 0, 1e-12);
+  const Pose2 none = FitRigid({{1, 1}}, {{2, 2}});
+  EXPECT_EQ(none.x, 0);
+  EXPECT_EQ(none.theta, 0);
+}
+
+TEST(RelocEvalTest, ErrorsAreJudgedInTheWorldFrameThroughTheFit) {
+  const Pose2 tf{1, 2, M_PI / 2};
+  // Map pose (1, 0, 0) is world (1, 3, pi/2).
+  PoseError e = ErrorInWorld({1, 0, 0}, tf, {1, 3, M_PI / 2});
+  EXPECT_NEAR(e.position_m, 0, 1e-12);
+  EXPECT_NEAR(e.heading_rad, 0, 1e-12);
+  e = ErrorInWorld({1, 0.1, 0.1}, tf, {1, 3, M_PI / 2});
+  EXPECT_NEAR(e.position_m, 0.1, 1e-12);
+  EXPECT_NEAR(e.heading_rad, 0.1, 1e-12);
+  // Heading error wraps.
+  e = ErrorInWorld({0, 0, M_PI / 2 - 0.05}, tf, {1, 2, -M_PI + 0.05});
+  EXPECT_NEAR(e.heading_rad, 0.1, 1e-12);
+}
+
+TEST(RelocEvalTest, KeptIdsAndDuplicateLines) {
+  const std::vector<slam::LineFeature> saved = {Line(1, {0, 0}, {4, 0}), Line(3, {4, 0}, {4, 5}),
+                                                Line(7, {1, 1}, {2, 1})};
+  std::vector<slam::LineFeature> out = {
+      Line(1, {0, 0.01}, {4, 0.01}),       // the same wall, kept id
+      Line(3, {4, 0}, {4, 5}),             // kept
+      Line(20, {1, 0.03}, {3, 0.02}),      // a new line on wall 1: duplicate
+      Line(21, {4.04, 4.8}, {4.03, 2}),    // on wall 3, reversed direction: duplicate
+      Line(22, {5, 0.01}, {6, 0.01}),      // collinear with 1 but beyond its end: new wall
+      Line(23, {1, 0.2}, {3, 0.2}),        // parallel, 20 cm off: not
+      Line(24, {0.5, 0.0}, {3.5, 0.2}),    // 3.8 deg off: not
+      Line(25, {1.2, 1.04}, {1.8, 0.98}),  // over object side 7 but 5.7 deg off: not
+  };
+  EXPECT_EQ(KeptLineIds(saved, out), 2);
+  EXPECT_EQ(DuplicateLines(saved, out), 2);
+  out[7] = Line(25, {1.2, 1.02}, {1.8, 1.0});  // 1.9 deg, 2 cm: a duplicate
+  EXPECT_EQ(DuplicateLines(saved, out), 3);
+  EXPECT_EQ(DuplicateLines(saved, out, 0.25, 5 * M_PI / 180), 5);  // looser: 23 and 24 too
+  EXPECT_EQ(DuplicateLines(saved, saved), 0);  // the saved lines themselves are not
+}
+
+TEST(RelocEvalTest, RandomStartsAreFreeSeededAndSpread) {
+  std::string error;
+  auto world =
+      sim::LoadWorldFile(std::string(IRSLAM_SOURCE_DIR) + "/tests/worlds/fig14.json", &error);
+  ASSERT_TRUE(world) << error;
+  const auto a = RandomFreeStarts(*world, 50, 0.3, 11);
+  const auto b = RandomFreeStarts(*world, 50, 0.3, 11);
+  const auto c = RandomFreeStarts(*world, 50, 0.3, 12);
+  ASSERT_EQ(a.size(), 50u);
+  double sx = 0, sc = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_TRUE(sim::FreePose(*world, a[i], 0.3, &error)) << error;
+    EXPECT_EQ(a[i].x, b[i].x);
+    EXPECT_EQ(a[i].theta, b[i].theta);
+    sx += a[i].x;
+    sc += std::cos(a[i].theta);
+  }
+  EXPECT_NE(a[0].x, c[0].x);
+  EXPECT_NEAR(sx / 50, world->Bounds().xmax / 2, 0.6);  // spread over the room
+  EXPECT_LT(std::abs(sc / 50), 0.4);                    // and over headings
+}
+
+TEST(RelocEvalTest, FreePoseSaysWhyNot) {
+  std::string error;
+  auto world =
+      sim::LoadWorldFile(std::string(IRSLAM_SOURCE_DIR) + "/tests/worlds/fig14.json", &error);
+  ASSERT_TRUE(world) << error;
+  std::string why;
+  EXPECT_TRUE(sim::FreePose(*world, {3.0, 0.8, 0}, 0.2, &why)) << why;
+  EXPECT_FALSE(sim::FreePose(*world, {9.0, 1.0, 0}, 0.2, &why));
+  EXPECT_EQ(why, "(9.00, 1.00) lies outside the room");
+  EXPECT_FALSE(sim::FreePose(*world, {0.3, 2.5, 0}, 0.2, &why));
+  EXPECT_EQ(why, "(0.30, 2.50) lies inside object 1 [0.00, 2.00, 0.60, 3.20]");
+  EXPECT_FALSE(sim::FreePose(*world, {3.9, 0.8, 0}, 0.2, &why));
+  EXPECT_EQ(why, "(3.90, 0.80) is 0.10 m from a wall or object side (at least 0.20 m needed)");
+  EXPECT_FALSE(sim::FreePose(*world, {NAN, 0.8, 0}, 0.2, &why));
+  // The --start argument.
+  const auto p = sim::ParsePoseArg("1.5,-2,4", &why);
+  ASSERT_TRUE(p) << why;
+  EXPECT_DOUBLE_EQ(p->y, -2);
+  EXPECT_NEAR(p->theta, 4 - 2 * M_PI, 1e-12);
+  for (const char* bad : {"1,2", "1,2,3,4", "1,,3", "a,b,c", "1,2,nan", "", "1,2,3,"}) {
+    EXPECT_FALSE(sim::ParsePoseArg(bad, &why)) << bad;
+    EXPECT_EQ(why,
+              std::string("expected X,Y,THETA (three numbers: metres, metres, radians), got '") +
+                  bad + "'");
+  }
+}
+
+}  // namespace
+}  // namespace irslam::metrics
