@@ -57,13 +57,15 @@ std::map<std::string, Seen> AllKeys() {
   Check(SurveyKeys(), "exploration", &keys);
   Check(ModelKeys(), "model", &keys);
   Check(CleaningKeys(), "cleaning", &keys);
+  Check(RelocalizeKeys(), "relocalize", &keys);
+  Check(MapChangeKeys(), "relocalize", &keys);
   return keys;
 }
 
 TEST(ControlOptionsTest, TablesAreConsistent) {
   const auto keys = AllKeys();
-  // mission: 7 + mode; cleaning: 25.
-  EXPECT_EQ(keys.size(), 13u + 8 + 5 + 6 + 35 + 2 + 6 + 13 + 5 + 25);
+  // mission: 7 + mode; model: 6 (same_size_m); cleaning: 25; relocalize: 4 + 7 (moved furniture).
+  EXPECT_EQ(keys.size(), 13u + 8 + 5 + 6 + 35 + 2 + 6 + 13 + 6 + 25 + 4 + 7);
 }
 
 // The keys config.cc read before the tables, with their bounds.
