@@ -149,9 +149,9 @@ TEST_F(CleanE2eTest, CleanShowsGrowingProgressEndsDoneAndSavesTheCells) {
   EXPECT_LT(fractions.front(), 0.2);
   EXPECT_GT(fractions.back(), fractions.front() + 0.5);
   const auto& cl = last["cleaning"];
-  EXPECT_EQ(cl["state"], "done");
-  EXPECT_EQ(cl["cells_done"], cl["cells_total"]);
-  EXPECT_GT(cl["fraction"].get<double>(), 0.96);  // estimated; measured 0.992-0.999 (4 runs)
+  EXPECT_EQ(cl.at("state"), "done");
+  EXPECT_EQ(cl.at("cells_done"), cl.at("cells_total"));
+  EXPECT_GT(cl.at("fraction").get<double>(), 0.96);  // estimated; measured 0.992-0.999 (4 runs)
   ASSERT_EQ(Ctl({"status"}, &out), 0) << out;
   EXPECT_NE(out.find("cleaning:   done, cells 1/1"), std::string::npos) << out;
 
@@ -223,24 +223,27 @@ TEST_F(CleanE2eTest, KillNineDuringCleaningKeepsTheSavedProgressIntact) {
   // The file parses, is the one written before the kill, and holds the progress.
   const auto after = ReadJson(MapFile());
   ASSERT_TRUE(after) << "torn map file";
-  EXPECT_EQ((*after)["seq"], (*before)["seq"]);
-  const auto& cl = (*after)["map"]["cleaning"];
+  // (const json: operator[] on a missing key is undefined; at() throws, contains() checks.)
+  ASSERT_TRUE(after->contains("map") && after->at("map").contains("cleaning")) << after->dump().substr(0, 400);
+  EXPECT_EQ(after->value("seq", -1), before->value("seq", -2));
+  const auto& cl = after->at("map").at("cleaning");
   std::fprintf(stderr, "clean_e2e: fig14 killed with %d of %zu cells saved done, %.2f m2 (%.1f %%) saved\n",
-               CellsDone(cl), cl["cells"].size(), cl["covered_m2"].get<double>(), 100 * cl["fraction"].get<double>());
-  EXPECT_EQ(cl["state"], "cleaning");
-  EXPECT_EQ(cl["cells"].size(), 7u);
+               CellsDone(cl), cl.at("cells").size(), cl.at("covered_m2").get<double>(), 100 * cl.at("fraction").get<double>());
+  EXPECT_EQ(cl.at("state"), "cleaning");
+  EXPECT_EQ(cl.at("cells").size(), 7u);
   EXPECT_GE(CellsDone(cl), 2);
-  EXPECT_GT(cl["covered_m2"].get<double>(), 4.0);  // two of seven cells of ~18.6 m2
-  EXPECT_GT(cl["fraction"].get<double>(), 0.2);
-  EXPECT_LT(cl["fraction"].get<double>(), 0.9);
+  EXPECT_GT(cl.at("covered_m2").get<double>(), 4.0);  // two of seven cells of ~18.6 m2
+  EXPECT_GT(cl.at("fraction").get<double>(), 0.2);
+  EXPECT_LT(cl.at("fraction").get<double>(), 0.9);
 
   // A restarted daemon accepts the file (checksum and all) and serves it.
   StartDaemon();
   ASSERT_EQ(Ctl({"map", "--out", dir_ + "/served.json"}, &out), 0) << out;
   const auto served = ReadJson(dir_ + "/served.json");
   ASSERT_TRUE(served);
-  EXPECT_EQ((*served)["saved"]["seq"], (*before)["seq"]) << served->dump().substr(0, 400);
-  EXPECT_EQ((*served)["cleaning"], (*after)["map"]["cleaning"]);
+  ASSERT_TRUE(served->contains("saved") && served->contains("cleaning")) << served->dump().substr(0, 400);
+  EXPECT_EQ(served->at("saved").value("seq", -1), before->value("seq", -2)) << served->dump().substr(0, 400);
+  EXPECT_EQ(served->at("cleaning"), cl);
 }
 
 // irslam-sim run --baseline bounce: the random-bounce cleaner for the time
@@ -260,15 +263,15 @@ TEST(BounceBaselineTest, SimRunBaselineBounceReportsItsTrueCoverage) {
   ASSERT_TRUE(result);
   EXPECT_EQ((*result)["baseline"], "bounce");
   const auto& cl = (*result)["cleaning"];
-  EXPECT_NEAR(cl["total_m2"].get<double>(), 8.85, 0.05);  // fig17's reachable floor
-  EXPECT_GT(cl["fraction"].get<double>(), 0.20);
-  EXPECT_LT(cl["fraction"].get<double>(), 0.33);  // far below planned cleaning's ~90 %
-  EXPECT_NEAR(cl["covered_m2"].get<double>(), cl["fraction"].get<double>() * cl["total_m2"].get<double>(), 1e-9);
-  EXPECT_DOUBLE_EQ(cl["finished_t"].get<double>(), 275.0);
+  EXPECT_NEAR(cl.at("total_m2").get<double>(), 8.85, 0.05);  // fig17's reachable floor
+  EXPECT_GT(cl.at("fraction").get<double>(), 0.20);
+  EXPECT_LT(cl.at("fraction").get<double>(), 0.33);  // far below planned cleaning's ~90 %
+  EXPECT_NEAR(cl.at("covered_m2").get<double>(), cl.at("fraction").get<double>() * cl.at("total_m2").get<double>(), 1e-9);
+  EXPECT_DOUBLE_EQ(cl.at("finished_t").get<double>(), 275.0);
   // The curve grows from nothing to the final fraction.
-  ASSERT_GE(cl["curve"].size(), 28u);
-  EXPECT_LT(cl["curve"][0][1].get<double>(), 0.05);
-  EXPECT_DOUBLE_EQ(cl["curve"].back()[1].get<double>(), cl["fraction"].get<double>());
+  ASSERT_GE(cl.at("curve").size(), 28u);
+  EXPECT_LT(cl.at("curve")[0][1].get<double>(), 0.05);
+  EXPECT_DOUBLE_EQ(cl.at("curve").back()[1].get<double>(), cl.at("fraction").get<double>());
   EXPECT_NE(testing::ReadFile(dir + "/bounce.svg").find("<svg"), std::string::npos);
   // Without --max-time: the cleaning budget (cleaning.max_time_s).
   ASSERT_EQ(RunCommand({kBin + "/sim/irslam-sim", "run", "--world", kSrc + "/tests/worlds/fig17.json", "--baseline",
