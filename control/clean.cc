@@ -130,7 +130,67 @@ void Clean::NextCell(bool unreachable) {
   ++cell_;
   point_ = 0;
   failures_ = 0;
+  SkipDone();
+}
+
+void Clean::SkipDone() {
+  while (cell_ < progress_.cells.size() && progress_.cells[cell_].done) ++cell_;
   phase_ = cell_ < plan_.routes.size() ? Phase::kPlanGoal : Phase::kDone;
+}
+
+namespace {
+double PolygonArea(const std::vector<Eigen::Vector2d>& p) {
+  double a = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    const auto& u = p[i];
+    const auto& v = p[(i + 1) % p.size()];
+    a += u.x() * v.y() - v.x() * u.y();
+  }
+  return 0.5 * std::abs(a);
+}
+
+Eigen::Vector2d PolygonCentre(const std::vector<Eigen::Vector2d>& p) {
+  Eigen::Vector2d c = Eigen::Vector2d::Zero();
+  for (const auto& q : p) c += q;
+  return p.empty() ? c : Eigen::Vector2d(c / static_cast<double>(p.size()));
+}
+
+bool InsidePolygon(const std::vector<Eigen::Vector2d>& p, const Eigen::Vector2d& q) {
+  bool in = false;
+  for (size_t i = 0, j = p.size() - 1; i < p.size(); j = i++) {
+    if ((p[i].y() > q.y()) != (p[j].y() > q.y()) &&
+        q.x() < (p[j].x() - p[i].x()) * (q.y() - p[i].y()) / (p[j].y() - p[i].y()) + p[i].x())
+      in = !in;
+  }
+  return in;
+}
+}  // namespace
+
+int Clean::Resume(const CleaningProgress& before) {
+  int taken = 0;
+  for (size_t i = 0; i < progress_.cells.size(); ++i) {
+    auto& pc = progress_.cells[i];
+    const double area = PolygonArea(pc.polygon);
+    const bool was_done = std::any_of(before.cells.begin(), before.cells.end(), [&](const auto& b) {
+      if (!b.done || b.polygon.size() < 3 || pc.polygon.size() < 3) return false;
+      const double ba = PolygonArea(b.polygon);
+      return InsidePolygon(pc.polygon, PolygonCentre(b.polygon)) && std::abs(ba - area) <= 0.25 * area;
+    });
+    if (!was_done) continue;
+    pc.done = true;
+    ++progress_.cells_done;
+    ++taken;
+    // Its route counts as swept (the coverage estimate marks the body's path).
+    const auto& r = plan_.routes[i];
+    for (size_t k = 1; k < r.size(); ++k) {
+      const double len = (r[k] - r[k - 1]).norm();
+      const int n = std::max(1, static_cast<int>(len / (0.25 * options_.cleaning_width_m)));
+      for (int j = 0; j <= n; ++j) grid_.Mark(r[k - 1] + (r[k] - r[k - 1]) * (static_cast<double>(j) / n));
+    }
+  }
+  cell_ = 0;
+  SkipDone();
+  return taken;
 }
 
 namespace {

@@ -85,6 +85,12 @@ class Clean {
   CleaningProgress Progress(double t, double distance_m) const;
   const CoveragePlan& plan() const { return plan_; }
   void Reset();
+  // Resumes a cleaning stopped before (issue 13; the saved map's or the live
+  // map's progress): after Begin, each planned cell that matches a cell done
+  // then (its outline's centre inside this cell's outline, areas within a
+  // quarter) is done now, its route counted as swept, and the tour skips it.
+  // Returns the number of cells taken as done.
+  int Resume(const CleaningProgress& before);
   // Driving was interrupted (issue 14: relocalising after the map disagreed):
   // the next Step plans its way to the current route point again.
   void Interrupted(double t);
@@ -96,6 +102,8 @@ class Clean {
   enum class Phase { kPlanGoal, kTransit, kSweep, kDone };
   // The current cell is finished (swept, or its rest given up).
   void NextCell(bool unreachable);
+  // Moves cell_ past cells already done (Resume).
+  void SkipDone();
   // The nearest point of the current cell's free space, 5 cm inside its
   // boundary where it is that wide (the route points of a pushed-out edge pass
   // lie outside it).

@@ -76,7 +76,7 @@ Mission::Mission(MissionOptions options, WallFollowerOptions wall, ExploreOption
       clean_mode_(options.mode == "clean"),
       model_options_(model),
       reloc_(options.relocalize),
-      agreement_(options.relocalize),
+      agreement_(options.relocalize, slam.mounts),
       changes_(options.relocalize.changes) {}
 
 void Mission::Enter(MissionState s, double t, std::string reason) {
@@ -119,6 +119,7 @@ void Mission::Reset(double t) {
   reloc_.End();
   changes_.Clear();
   line_removals_.clear();
+  resume_cleaning_.reset();
 }
 
 void Mission::WatchChanges(const slam::Slam& slam, const std::vector<TimedPose>& trajectory) {
@@ -152,6 +153,7 @@ bool Mission::Start(double t, std::string* why) {
 bool Mission::StartInMap(double t, SavedMission saved, std::string* why) {
   if (!CanStart(state_, reason_, why)) return false;
   Reset(t);
+  resume_cleaning_ = std::move(saved.cleaning);
   modeler_.Seed(saved.model, saved.map.trajectory);
   survey_.Exhaust();  // the saved mission surveyed the room already
   reloc_.Begin(t, std::move(saved.map));
@@ -167,7 +169,10 @@ bool Mission::StartInMap(double t, SavedMission saved, std::string* why) {
 
 bool Mission::StartKnown(double t, const slam::Slam& slam, std::string* why) {
   if (!CanStart(state_, reason_, why)) return false;
+  std::optional<CleaningProgress> before;
+  if (clean_.active()) before = clean_.progress();
   Reset(t);
+  resume_cleaning_ = std::move(before);
   agreement_.Reset(slam);
   checking_ = true;
   WatchChanges(slam, slam.map_trajectory());
@@ -214,6 +219,21 @@ WheelCommand Mission::StepRelocalize(double t, double dt, const slam::Slam& slam
     local_to_map_ = d->local_to_map;
     return Halt();
   }
+  if (reloc_.TimedOut(t) && reloc_progress_.attempts > 1) {
+    // Relocalising again (the map disagreed): the saved map is not given up
+    // for a local one. Search again; after max_attempts, stop with the map as
+    // it was before it disagreed (it is what gets saved).
+    if (reloc_progress_.attempts < options_.relocalize.max_attempts) {
+      ++reloc_progress_.attempts;
+      reloc_.Begin(t, reloc_.map());
+      slam_reset_ = true;
+      reason_ = "still relocalising (attempt " + std::to_string(reloc_progress_.attempts) + ")";
+      return ToWheels(tw, dt);
+    }
+    adoption_ = Adoption{Pose2{}, reloc_.map().lines};
+    give_up_after_adoption_ = true;
+    return Halt();
+  }
   if (reloc_.TimedOut(t)) {
     // The saved map is given up: what the local SLAM made so far is a fresh
     // exploration's start (its own frame), and it goes on as one.
@@ -240,6 +260,15 @@ void Mission::Adopted(double t, const slam::Slam& slam) {
   reloc_.End();
   agreement_.Reset(slam);
   checking_ = true;
+  if (give_up_after_adoption_) {
+    give_up_after_adoption_ = false;
+    checking_ = false;
+    reloc_.End();
+    if (clean_.active() && state_ != MissionState::kIdle) clean_.SetState(CleanState::kStopped, t, slam.distance_m());
+    if (state_ != MissionState::kIdle)
+      Enter(MissionState::kIdle, t, "lost: could not relocalise in the map again (it is kept as it was)");
+    return;
+  }
   const std::string how = "relocalised in the saved map (" +
                           std::to_string(reloc_progress_.hypotheses) + " hypotheses, score " +
                           std::to_string(static_cast<int>(std::lround(100 * reloc_progress_.best_score))) +
@@ -256,10 +285,11 @@ void Mission::Adopted(double t, const slam::Slam& slam) {
   }
 }
 
-bool Mission::CheckAgreement(double t, const slam::Slam& slam) {
-  if (!checking_ || agreement_.Step(slam)) return true;
-  const int pct = static_cast<int>(std::lround(100 * agreement_.agreement()));
-  const std::string why = "the map disagrees (" + std::to_string(pct) + " % of recent lines matched)";
+bool Mission::CheckAgreement(double t, const slam::Slam& slam, const RangeScan& scan) {
+  if (!checking_ || agreement_.Step(slam, scan)) return true;
+  const auto pct = [](double v) { return std::to_string(static_cast<int>(std::lround(100 * v))); };
+  const std::string why = "the map disagrees (" + pct(agreement_.agreement()) + " % of recent lines matched, " +
+                          pct(agreement_.scan_agreement()) + " % of IR rays)";
   if (reloc_progress_.attempts >= options_.relocalize.max_attempts) {
     checking_ = false;
     if (state_ == MissionState::kClean || state_ == MissionState::kReturnHome)
@@ -288,6 +318,7 @@ void Mission::Stop(double t) {
   if (state_ == MissionState::kFault) resume_state_ = MissionState::kIdle;
   if (state_ == MissionState::kClean || state_ == MissionState::kReturnHome)
     clean_.SetState(CleanState::kStopped, t, last_distance_);
+  RestoreMapOnEnd();
   if (state_ != MissionState::kFault) Enter(MissionState::kIdle, t, "stopped by request");
   last_cmd_ = {};
 }
@@ -324,6 +355,15 @@ WheelCommand Mission::ToWheels(const Twist& tw, double dt) {
   return last_cmd_;
 }
 
+void Mission::RestoreMapOnEnd() {
+  // Relocalising again, the SLAM holds only a local map: the mission ending
+  // now must leave the saved map as it was before it disagreed (that is what
+  // gets saved), not the local one.
+  if (state_ != MissionState::kRelocalize || reloc_progress_.attempts < 2 || !reloc_.active()) return;
+  adoption_ = Adoption{Pose2{}, reloc_.map().lines};
+  give_up_after_adoption_ = true;
+}
+
 bool Mission::Watchdogs(double t, const slam::Slam& slam) {
   // (Relocalising again while cleaning counts as cleaning: its own time limit.)
   const bool cleaning = state_ == MissionState::kClean || state_ == MissionState::kReturnHome ||
@@ -331,6 +371,7 @@ bool Mission::Watchdogs(double t, const slam::Slam& slam) {
   if (cleaning ? t - clean_started_ > options_.cleaning.max_time_s
                : t - started_at_ > options_.max_time_s) {
     if (cleaning) clean_.SetState(CleanState::kStopped, t, slam.distance_m());
+    RestoreMapOnEnd();
     Enter(MissionState::kIdle, t, cleaning ? "cleaning time limit reached" : "mission time limit reached");
     return false;
   }
@@ -338,6 +379,7 @@ bool Mission::Watchdogs(double t, const slam::Slam& slam) {
     progress_distance_ = slam.distance_m();
     progress_t_ = t;
   } else if (t - progress_t_ > options_.progress_timeout_s) {
+    RestoreMapOnEnd();
     Enter(
         MissionState::kIdle, t,
         "no progress for " + std::to_string(static_cast<int>(options_.progress_timeout_s)) + " s");
@@ -367,7 +409,7 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
       break;
   }
   if (!Watchdogs(t, slam)) return Halt();
-  if (!CheckAgreement(t, slam)) return Halt();
+  if (!CheckAgreement(t, slam, scan)) return Halt();
   if (checking_ && state_ != MissionState::kRelocalize) StepChanges(slam);
   switch (state_) {
     case MissionState::kRelocalize:
@@ -538,8 +580,14 @@ WheelCommand Mission::Finish(double t, const slam::Slam& slam, const Environment
   // Plan the coverage once, bounded by the room's size, and clean.
   clean_.Begin(t, slam, m, bumps_);
   clean_started_ = t;
-  return To(MissionState::kClean, t,
-            "cleaning " + std::to_string(clean_.plan().cells.size()) + " cells");
+  // A cleaning stopped before (not finished) goes on with the cells it left.
+  const bool resume = resume_cleaning_ && resume_cleaning_->state != CleanState::kDone &&
+                      resume_cleaning_->state != CleanState::kNone;
+  const int done = resume ? clean_.Resume(*resume_cleaning_) : 0;
+  resume_cleaning_.reset();
+  std::string what = "cleaning " + std::to_string(clean_.plan().cells.size()) + " cells";
+  if (done > 0) what += " (resumed: " + std::to_string(done) + " done before)";
+  return To(MissionState::kClean, t, what);
 }
 
 WheelCommand Mission::StepClean(double t, double dt, const slam::Slam& slam,

@@ -101,6 +101,7 @@ options::Table<MissionOptions> MissionKeys();
 struct SavedMission {
   SavedLines map;
   EnvironmentModel model;
+  std::optional<CleaningProgress> cleaning;  // a cleaning stopped before: resumed
 };
 
 // The SLAM is to adopt the saved map: Slam::AdoptMap(local_to_map, lines).
@@ -218,7 +219,9 @@ class Mission {
                               bool bumped);
   // After a commit or a known start: the map's agreement is checked every
   // period; false when the mission turned to relocalising (or gave up).
-  bool CheckAgreement(double t, const slam::Slam& slam);
+  bool CheckAgreement(double t, const slam::Slam& slam, const RangeScan& scan);
+  // Ending while relocalising again: the map before it disagreed is restored.
+  void RestoreMapOnEnd();
   // The common reset of every start.
   void Reset(double t);
 
@@ -271,8 +274,10 @@ class Mission {
   // Watches the saved furniture for moves (after a commit or a known start).
   void WatchChanges(const slam::Slam& slam, const std::vector<TimedPose>& trajectory);
   void StepChanges(const slam::Slam& slam);
+  std::optional<CleaningProgress> resume_cleaning_;  // the next cleaning resumes this
   Pose2 local_to_map_;          // of the last commit
   bool home_in_local_ = false;  // home_ was taken in a relocalisation's local frame
+  bool give_up_after_adoption_ = false;  // the adoption restores the map; then idle
   std::string clean_summary_;
   double last_distance_ = 0;  // travelled, at the last step
 };

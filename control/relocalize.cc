@@ -1,5 +1,6 @@
 #include "control/relocalize.h"
 
+#include <cmath>
 #include <utility>
 
 namespace irslam::control {
@@ -15,6 +16,12 @@ options::Table<RelocalizeOptions> RelocalizeKeys() {
        "matched share of those lines below which the map disagrees (relocalise again)"},
       {"max_attempts", &O::max_attempts, 1, 100, "",
        "relocalisations in one mission before the saved map is given up"},
+      {"scan_max_m", &O::scan_max_m, 0.1, 2, "m",
+       "after the commit, IR rays whose mapped wall is within this are judged against the map ..."},
+      {"scan_tolerance_m", &O::scan_tolerance_m, 0.01, 1, "m", "... a reading off by more (or missing) disagrees"},
+      {"scan_rays", &O::scan_rays, 10, 100000, "", "... over this many recent judged rays"},
+      {"scan_max_disagree", &O::scan_max_disagree, 0, 1, "",
+       "... of which a larger share disagreeing means the map disagrees (relocalise again)"},
   };
   return kKeys;
 }
@@ -42,13 +49,64 @@ double Relocalize::best_score() const {
 
 void MapAgreement::Reset(const slam::Slam& slam) {
   last_ = slam.stats();
+  rays_.clear();
+  rays_agreeing_ = 0;
+  scan_agreement_ = 1;
+  last_scan_t_ = -1;
   windows_.clear();
   checkpoints_.clear();
   checkpoints_.push_back({slam.map_lines(), slam.map_trajectory()});
   agreement_ = 1;
 }
 
-bool MapAgreement::Step(const slam::Slam& slam) {
+namespace {
+// Distance along the ray from o in direction d to segment ab (nullopt: missed).
+std::optional<double> RayHit(const Eigen::Vector2d& o, const Eigen::Vector2d& d, const Eigen::Vector2d& a,
+                             const Eigen::Vector2d& b) {
+  const Eigen::Vector2d e = b - a;
+  const double den = d.x() * e.y() - d.y() * e.x();
+  if (std::abs(den) < 1e-9) return std::nullopt;
+  const Eigen::Vector2d w = a - o;
+  const double t = (w.x() * e.y() - w.y() * e.x()) / den;
+  const double u = (w.x() * d.y() - w.y() * d.x()) / den;
+  if (t <= 0 || u < 0 || u > 1) return std::nullopt;
+  return t;
+}
+}  // namespace
+
+bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan) {
+  if (scan.t == last_scan_t_) return true;
+  last_scan_t_ = scan.t;
+  const Pose2 me = slam.pose();  // internal frame, as the lines
+  for (size_t i = 0; i < mounts_.size(); ++i) {
+    const Pose2 ray = Compose(me, {mounts_[i].x, mounts_[i].y, mounts_[i].theta});
+    const Eigen::Vector2d o(ray.x, ray.y), d(std::cos(ray.theta), std::sin(ray.theta));
+    double expected = options_.scan_max_m;
+    bool wall = false;
+    for (const auto& l : slam.lines()) {
+      const auto hit = RayHit(o, d, l.p0, l.p1);
+      if (hit && *hit < expected) {
+        expected = *hit;
+        wall = true;
+      }
+    }
+    if (!wall) continue;
+    const auto& m = scan.range_m[i];
+    const bool agrees = m && std::abs(*m - expected) <= options_.scan_tolerance_m;
+    rays_.push_back(agrees);
+    rays_agreeing_ += agrees;
+    if (static_cast<int>(rays_.size()) > options_.scan_rays) {
+      rays_agreeing_ -= rays_.front();
+      rays_.pop_front();
+    }
+  }
+  if (static_cast<int>(rays_.size()) < options_.scan_rays) return true;
+  scan_agreement_ = static_cast<double>(rays_agreeing_) / static_cast<double>(rays_.size());
+  return 1 - scan_agreement_ <= options_.scan_max_disagree;
+}
+
+bool MapAgreement::Step(const slam::Slam& slam, const RangeScan& scan) {
+  if (!JudgeScan(slam, scan)) return false;
   const slam::SlamStats& s = slam.stats();
   if (s.windows == last_.windows) return true;
   // Association outcome of the windows closed since the last call: matched

@@ -21,6 +21,7 @@
 #ifndef IRSLAM_CONTROL_RELOCALIZE_H_
 #define IRSLAM_CONTROL_RELOCALIZE_H_
 
+#include <array>
 #include <deque>
 #include <optional>
 #include <vector>
@@ -30,6 +31,8 @@
 #include "slam/slam.h"
 #include "types/geometry.h"
 #include "types/options.h"
+#include "types/robot.h"
+#include "types/signals.h"
 
 namespace irslam::control {
 
@@ -39,6 +42,14 @@ struct RelocalizeOptions {
   int min_lines_judged = 8;        // ... once they hold at least this many lines
   double min_agreement = 0.3;      // matched share below this: the map disagrees
   int max_attempts = 5;            // relocalisations in one mission before giving the map up
+  // The IR readings against the ranges the map predicts (rays whose mapped
+  // wall lies within scan_max_m): a reading off by more than scan_tolerance_m
+  // (or missing) disagrees; over the last scan_rays judged rays, more than
+  // scan_max_disagree of them disagreeing means the map disagrees.
+  double scan_max_m = 0.7;
+  double scan_tolerance_m = 0.15;
+  int scan_rays = 150;
+  double scan_max_disagree = 1.0;  // 1: off (see docs/relocalization.md: it misjudges today)
   MapChangeOptions changes;        // moved furniture (map_changes.h)
 };
 options::Table<RelocalizeOptions> RelocalizeKeys();  // [relocalize], beside slam::RelocalizeKeys()
@@ -80,23 +91,34 @@ class Relocalize {
 
 class MapAgreement {
  public:
-  explicit MapAgreement(RelocalizeOptions options) : options_(options) {}
+  MapAgreement(RelocalizeOptions options, const std::array<SensorMount, kNumIrSensors>& mounts)
+      : options_(options), mounts_(mounts) {}
 
   // Committed: judging starts now (the SLAM has adopted the saved map).
   void Reset(const slam::Slam& slam);
   // After each control period: false when the map disagrees (see above).
-  bool Step(const slam::Slam& slam);
+  bool Step(const slam::Slam& slam, const RangeScan& scan);
   // The map as it was check_windows windows ago (map frame), to relocalise in.
   const SavedLines& checkpoint() const { return checkpoints_.front(); }
   // Matched share over the judged windows (1 while too few lines).
   double agreement() const { return agreement_; }
+  // Share of the recent judged IR rays agreeing with the map (1 while too few).
+  double scan_agreement() const { return scan_agreement_; }
 
  private:
   struct Window {
     int matched = 0;
     int unexplained = 0;
   };
+  // The scan judged against the map (false: the map disagrees).
+  bool JudgeScan(const slam::Slam& slam, const RangeScan& scan);
+
   RelocalizeOptions options_;
+  std::array<SensorMount, kNumIrSensors> mounts_;
+  double last_scan_t_ = -1;
+  std::deque<bool> rays_;  // judged rays, true: agrees
+  int rays_agreeing_ = 0;
+  double scan_agreement_ = 1;
   slam::SlamStats last_;
   std::deque<Window> windows_;
   std::deque<SavedLines> checkpoints_;

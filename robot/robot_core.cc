@@ -175,6 +175,7 @@ bool RobotCore::Start(double now_s, std::string* why) {
   saved.map = {saved_map_->lines, saved_map_->trajectory};
   saved.model.room = saved_map_->room;
   saved.model.objects = saved_map_->objects;
+  saved.cleaning = saved_map_->cleaning;
   return mission_.StartInMap(now_s, std::move(saved), why);
 }
 
@@ -195,6 +196,10 @@ void RobotCore::Renew(const std::optional<slam::CalibrationEstimate>& calibratio
 
 void RobotCore::Stop(double now_s) {
   mission_.Stop(now_s);
+  if (std::optional<control::Adoption> a = mission_.TakeAdoption()) {
+    slam_.AdoptMap(a->local_to_map, a->lines);
+    mission_.Adopted(now_s, slam_);
+  }
   last_cmd_ = {};
 }
 
