@@ -151,7 +151,7 @@ void AddCommands(CLI::App& app, CtlArgs* a) {
       ->capture_default_str();
   a->wait = app.add_subcommand("wait", "Wait until the mission reaches a state");
   a->wait->add_option("--state", a->want_state,
-                      "idle, wall_follow, model, go_to_p1, contour_follow, clean, return_home, done, fault")
+                      "idle, relocalize, wall_follow, model, go_to_p1, contour_follow, clean, return_home, done, fault")
       ->required();
   a->wait->add_option("--timeout", a->timeout, "Give up after this many seconds (default: never)");
   a->watch = app.add_subcommand("watch", "Show state, pose, map and CAN counters live");
