@@ -1,3 +1,7 @@
+// Why this file is long (~650 lines): it holds every row of the transition
+// table in mission.h and nothing else - each behaviour (wall following, go-to,
+// contour, survey, cleaning, relocalisation, map agreement, moved furniture) is
+// its own class in its own file; splitting the rows apart would split the table.
 #include "control/mission.h"
 
 #include <algorithm>
