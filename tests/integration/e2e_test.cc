@@ -698,6 +698,61 @@ TEST_F(E2eTest, CandumpLogOfTheBusDecodesWithTheDbc) {
   for (const char* name : {"WHEEL_CMD", "CTRL_STATUS", "ENCODER", "IR_A", "IR_B"}) EXPECT_GT(by_name[name], 0) << name;
 }
 
+// Issue 16: a candump -L log of a mission plays into a live irslamd with
+// can-utils' canplayer (SocketCAN only: the VM suite). The controller's frames
+// of the log (irslamd's own are left out: played back they would be a second
+// commander on the bus) reach the daemon and are taken as from a controller.
+TEST_F(E2eTest, CanplayerPlaysARecordedLogIntoALiveDaemon) {
+  const bool socketcan = bus_.rfind("unix:", 0) != 0 && ::access("/usr/bin/canplayer", X_OK) == 0 &&
+                         ::access("/usr/bin/candump", X_OK) == 0;
+  if (!socketcan) GTEST_SKIP() << "needs SocketCAN and can-utils (vcan-scripts/vm-test.sh)";
+  StartAll();
+  ASSERT_EQ(Ctl({"start"}), 0);
+  std::string log;
+  ASSERT_EQ(RunCommand({"/usr/bin/candump", "-L", "-n", "1500", bus_}, &log, WallS(60)), 0) << log;
+  daemon_.Signal(SIGTERM);
+  daemon_.Wait(5);
+  sim_.Signal(SIGTERM);
+  sim_.Wait(5);
+  // The controller's frames only, by the DBC's transmitter.
+  const auto dbc = testing::ParseDbc(kSrc + "/proto/irslam.dbc");
+  std::istringstream lines(log);
+  std::ofstream played(dir_ + "/controller.log");
+  std::string line;
+  int kept = 0;
+  while (std::getline(lines, line)) {
+    std::istringstream ls(line);
+    std::string stamp, iface, text;
+    ls >> stamp >> iface >> text;
+    can_frame f;
+    if (!proto::ParseCandumpString(text, &f)) continue;
+    for (const auto& [name, m] : dbc) {
+      if (m.id == f.can_id && (name == "CTRL_STATUS" || name == "ENCODER" || name == "IR_A" || name == "IR_B")) {
+        played << line << "\n";
+        ++kept;
+      }
+    }
+  }
+  played.close();
+  ASSERT_GT(kept, 500);
+  StartOptions o;
+  o.wait_for_controller = false;
+  StartDaemon(o);
+  const auto before = Status().value();
+  std::string out;
+  ASSERT_EQ(RunCommand({"/usr/bin/canplayer", "-I", dir_ + "/controller.log"}, &out, WallS(60)), 0) << out;
+  Sleep(0.3);
+  const auto after = Status().value();
+  const auto grew = [&](const char* key) {
+    return after["frames"][key].get<uint64_t>() - before["frames"][key].get<uint64_t>();
+  };
+  EXPECT_GT(grew("encoder"), 100u) << after["frames"].dump();
+  EXPECT_GT(grew("status"), 10u) << after["frames"].dump();
+  EXPECT_GT(grew("ir"), 100u) << after["frames"].dump();
+  EXPECT_EQ(after["frames"]["unknown_id"], before["frames"]["unknown_id"]);
+  EXPECT_NE(after["state"], "fault") << after.dump().substr(0, 300);
+}
+
 TEST_F(E2eTest, FrameSentWithCansendInDbcLayoutIsDecoded) {
   StartAll();
   const auto before = Status().value();
