@@ -1,5 +1,7 @@
 #include "control/clean.h"
 
+#include "control/room_geometry.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -155,15 +157,6 @@ Eigen::Vector2d PolygonCentre(const std::vector<Eigen::Vector2d>& p) {
   return p.empty() ? c : Eigen::Vector2d(c / static_cast<double>(p.size()));
 }
 
-bool InsidePolygon(const std::vector<Eigen::Vector2d>& p, const Eigen::Vector2d& q) {
-  bool in = false;
-  for (size_t i = 0, j = p.size() - 1; i < p.size(); j = i++) {
-    if ((p[i].y() > q.y()) != (p[j].y() > q.y()) &&
-        q.x() < (p[j].x() - p[i].x()) * (q.y() - p[i].y()) / (p[j].y() - p[i].y()) + p[i].x())
-      in = !in;
-  }
-  return in;
-}
 }  // namespace
 
 int Clean::Resume(const CleaningProgress& before) {
@@ -174,7 +167,7 @@ int Clean::Resume(const CleaningProgress& before) {
     const bool was_done = std::any_of(before.cells.begin(), before.cells.end(), [&](const auto& b) {
       if (!b.done || b.polygon.size() < 3 || pc.polygon.size() < 3) return false;
       const double ba = PolygonArea(b.polygon);
-      return InsidePolygon(pc.polygon, PolygonCentre(b.polygon)) && std::abs(ba - area) <= 0.25 * area;
+      return room_geometry::InsidePolygon(pc.polygon, PolygonCentre(b.polygon)) && std::abs(ba - area) <= 0.25 * area;
     });
     if (!was_done) continue;
     pc.done = true;

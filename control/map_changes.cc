@@ -23,10 +23,10 @@ options::Table<MapChangeOptions> MapChangeKeys() {
 }
 
 void MapChanges::Reset(const std::vector<slam::LineFeature>& lines, const std::vector<TimedPose>& trajectory,
-                       const EnvironmentModel& model) {
+                       const EnvironmentModel& model, double axis_tolerance_rad) {
   sides_.clear();
   reported_.clear();
-  const std::vector<room_geometry::Side> sides = room_geometry::ToSides(lines, trajectory, 0.12);
+  const std::vector<room_geometry::Side> sides = room_geometry::ToSides(lines, trajectory, axis_tolerance_rad);
   for (const auto& o : model.objects) {
     for (int id : o.lines) {
       const auto s = std::find_if(sides.begin(), sides.end(), [&](const auto& x) { return x.id == id; });

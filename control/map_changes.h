@@ -38,8 +38,9 @@ class MapChanges {
 
   // Watches the objects' sides of `model` (map frame lines and the trajectory
   // they were seen from) from now on; nothing is watched after Clear.
+  // axis_tolerance_rad: the modeller's ([model]), so the sides are the model's.
   void Reset(const std::vector<slam::LineFeature>& lines, const std::vector<TimedPose>& trajectory,
-             const EnvironmentModel& model);
+             const EnvironmentModel& model, double axis_tolerance_rad);
   void Clear() { sides_.clear(); }
   // One period at map pose `me`; `lines` is the SLAM's map (map frame, ids).
   // Returns the ids of objects found moved in this period (each object once).

@@ -127,7 +127,7 @@ void Mission::Reset(double t) {
 }
 
 void Mission::WatchChanges(const slam::Slam& slam, const std::vector<TimedPose>& trajectory) {
-  changes_.Reset(slam.map_lines(), trajectory, modeler_.model());
+  changes_.Reset(slam.map_lines(), trajectory, modeler_.model(), model_options_.axis_tolerance_rad);
 }
 
 void Mission::StepChanges(const slam::Slam& slam) {

@@ -126,10 +126,7 @@ std::vector<can_frame> RobotCore::Tick(double now_s) {
   last_cmd_ = mission_.Step(now_s, slam_, ir_.scan(), motor_.bumpers() | gpio_bumpers);
   // Issue 14: the mission committed to a pose in the saved map (the SLAM
   // adopts it), or the map disagreed (a fresh local SLAM for a new search).
-  if (std::optional<control::Adoption> a = mission_.TakeAdoption()) {
-    slam_.AdoptMap(a->local_to_map, a->lines);
-    mission_.Adopted(now_s, slam_);
-  }
+  AdoptIfAsked(now_s);
   if (mission_.TakeSlamReset()) slam_.ForgetMap();
   if (const std::vector<int> gone = mission_.TakeLineRemovals(); !gone.empty()) {
     slam_.RemoveLines(gone);
@@ -179,6 +176,13 @@ bool RobotCore::Start(double now_s, std::string* why) {
   return mission_.StartInMap(now_s, std::move(saved), why);
 }
 
+void RobotCore::AdoptIfAsked(double now_s) {
+  if (std::optional<control::Adoption> a = mission_.TakeAdoption()) {
+    slam_.AdoptMap(a->local_to_map, a->lines);
+    mission_.Adopted(now_s, slam_);
+  }
+}
+
 void RobotCore::Renew(const std::optional<slam::CalibrationEstimate>& calibration) {
   // Nothing mapped since boot and no calibration to start from: the SLAM and
   // the mission are as new (kept as they are: the first mission of a process
@@ -196,10 +200,7 @@ void RobotCore::Renew(const std::optional<slam::CalibrationEstimate>& calibratio
 
 void RobotCore::Stop(double now_s) {
   mission_.Stop(now_s);
-  if (std::optional<control::Adoption> a = mission_.TakeAdoption()) {
-    slam_.AdoptMap(a->local_to_map, a->lines);
-    mission_.Adopted(now_s, slam_);
-  }
+  AdoptIfAsked(now_s);
   last_cmd_ = {};
 }
 
@@ -224,10 +225,7 @@ CoreStatus RobotCore::Status(double now_s) const {
   s.controller = {motor_.ControllerAlive(now_s), motor_.last_status()};
   s.frames = {motor_.counters(), ir_.counters()};
   if (mission_.clean().active()) s.cleaning = mission_.cleaning(now_s, slam_.distance_m());
-  if (const auto r = mission_.relocalize()) {
-    s.relocalize = RelocalizeStatus{r->committed,  r->started_t,  r->committed_t, r->hypotheses,
-                                    r->best_score, r->evidence_m, r->attempts};
-  }
+  s.relocalize = mission_.relocalize();
   return s;
 }
 

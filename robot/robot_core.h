@@ -154,6 +154,8 @@ class RobotCore {
   // A fresh SLAM and mission (a start from nothing or in a saved map), the
   // calibration carried over (the saved map's, else the live one's).
   void Renew(const std::optional<slam::CalibrationEstimate>& calibration);
+  // The mission committed (or restores the map on an end): the SLAM adopts it.
+  void AdoptIfAsked(double now_s);
 };
 
 }  // namespace irslam::robot

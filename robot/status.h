@@ -74,17 +74,8 @@ struct FrameCounters {
 };
 
 // Relocalisation in a saved map (issue 14): while in state relocalize, and
-// after the commit (committed = true, the time and the number of hypotheses
-// left then).
-struct RelocalizeStatus {
-  bool committed = false;
-  double started_t = 0;     // robot time relocalisation began
-  double committed_t = 0;   // robot time of the commit (when committed)
-  int hypotheses = 0;       // kept now (or at the commit)
-  double best_score = 0;    // of the best hypothesis, [-inf, 1]
-  double evidence_m = 0;    // local line length gathered
-  int attempts = 1;         // relocalisations since the start (> 1: the map disagreed, e.g. kidnap)
-};
+// after the commit (the mission's own record, control/mission.h).
+using RelocalizeStatus = control::RelocalizeProgress;
 
 struct CoreStatus {
   double robot_time = 0;

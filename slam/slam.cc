@@ -32,6 +32,13 @@ Eigen::Vector2d InverseTransform(const Pose2& p, const Eigen::Vector2d& v) {
 Eigen::Vector2d Direction(double theta) { return {-std::sin(theta), std::cos(theta)}; }
 Eigen::Vector2d Normal(double theta) { return {std::cos(theta), std::sin(theta)}; }
 
+// The pose uncertainty of a mission continuing in a saved map ([slam.resume]).
+Eigen::Matrix3d ResumedPoseCov(const ResumeOptions& ro) {
+  return Eigen::Vector3d(ro.pose_sigma_m * ro.pose_sigma_m, ro.pose_sigma_m * ro.pose_sigma_m,
+                         ro.pose_sigma_rad * ro.pose_sigma_rad)
+      .asDiagonal();
+}
+
 }  // namespace
 
 Slam::Slam(SlamOptions options) : options_(options), odometry_(options.geometry) {
@@ -107,10 +114,7 @@ void Slam::AdoptMap(const Pose2& local_to_map, const std::vector<LineFeature>& s
     c(1, 1) = std::max(c(1, 1), floor(1, 1));
     state.push_back({l.rho, l.theta, c});
   }
-  const Eigen::Matrix3d pose_cov =
-      Eigen::Vector3d(ro.pose_sigma_m * ro.pose_sigma_m, ro.pose_sigma_m * ro.pose_sigma_m,
-                      ro.pose_sigma_rad * ro.pose_sigma_rad)
-          .asDiagonal();
+  const Eigen::Matrix3d pose_cov = ResumedPoseCov(ro);
   // Local lines the saved map does not have (a piece of furniture moved or
   // new, seen while relocalising) are kept, as new lines after the saved ones:
   // the model then knows them before any work is planned.
@@ -162,10 +166,7 @@ void Slam::AdoptMap(const Pose2& local_to_map, const std::vector<LineFeature>& s
 
 void Slam::ForgetMap() {
   const ResumeOptions& ro = options_.resume;
-  const Eigen::Matrix3d pose_cov =
-      Eigen::Vector3d(ro.pose_sigma_m * ro.pose_sigma_m, ro.pose_sigma_m * ro.pose_sigma_m,
-                      ro.pose_sigma_rad * ro.pose_sigma_rad)
-          .asDiagonal();
+  const Eigen::Matrix3d pose_cov = ResumedPoseCov(ro);
   ekf_.Restart(ekf_.pose(), pose_cov, {});
   lines_.clear();
   trajectory_.clear();
