@@ -20,6 +20,8 @@
 #ifndef IRSLAM_DAEMON_API_SERVER_H_
 #define IRSLAM_DAEMON_API_SERVER_H_
 
+#include <pthread.h>
+
 #include <sys/types.h>
 
 #include <atomic>
@@ -124,6 +126,12 @@ class ApiServer {
   void Adopt(int fd, PeerCred peer);
   // Stops the API thread and closes every client. Control thread.
   void Close();
+  // The API thread, for its scheduling (daemon/realtime.h); false before it runs.
+  bool ApiThread(pthread_t* thread) {
+    if (!thread_.joinable()) return false;
+    *thread = thread_.native_handle();
+    return true;
+  }
   // The control loop calls this once per period: `status`, `map` and
   // notification payloads are rebuilt at most once per period. Control thread.
   void NewPeriod() { ++period_; }

@@ -34,6 +34,15 @@ options::Table<DaemonSettings> StateKeys() {
   return kKeys;
 }
 
+options::Table<DaemonSettings> LoopThreadKeys() {
+  static constexpr options::Key<DaemonSettings> kKeys[] = {
+      {"realtime_priority", &DaemonSettings::realtime_priority, 0, 99, "",
+       "irslamd only: SCHED_FIFO priority of the control loop's thread, 0 = normal scheduling (needs "
+       "LimitRTPRIO= or CAP_SYS_NICE; refused: normal scheduling, logged)"},
+  };
+  return kKeys;
+}
+
 options::Table<ApiSettings> ApiKeys() {
   using A = ApiSettings;
   static constexpr options::Key<A> kKeys[] = {
@@ -211,6 +220,7 @@ void WalkConfig(DaemonSettings* s, Visitor* v) {
   v->End();
   v->Section("control", "");
   v->Keys(o, ControlPeriodKeys());
+  v->Keys(s, LoopThreadKeys());
   v->End();
   v->Section("wall_follow", "following the wall on the right (paper section 5)");
   v->Keys(&o->wall, control::WallFollowerKeys());

@@ -39,6 +39,9 @@ struct DaemonSettings {
   drivers::GpioSettings gpio;  // [gpio]'s lines (its debounce_s is core.safety's)
   RecordSettings record;                                   // [record]
   std::string state_dir = "/var/lib/irslam";               // [state].dir: the saved map
+  // [control].realtime_priority: SCHED_FIFO priority of the control loop's
+  // thread, 0 = normal scheduling (daemon/realtime.h).
+  int realtime_priority = 10;
 };
 
 }  // namespace irslam

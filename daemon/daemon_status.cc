@@ -3,6 +3,8 @@
 // place that calls RobotCore::Status for the API.
 #include "daemon/irslamd.h"
 
+#include <algorithm>
+
 namespace irslam {
 namespace {
 
@@ -65,7 +67,9 @@ nlohmann::json Daemon::StatusJson() {
                  {"jitter_last", static_cast<double>(scheduler_.last_late_ns()) * 1e-9},
                  {"work_max", max_work_s_},
                  {"work", TickProfileJson(profile_)},
-                 {"loop_stalls", core_->loop_stalls()}};
+                 {"loop_stalls", core_->loop_stalls()},
+                 {"scheduling", scheduling_.Describe(settings_.realtime_priority)},
+                 {"api_scheduling", api_scheduling_.Describe(std::max(settings_.realtime_priority - 1, 0))}};
   const auto& ps = core_->planner_stats();
   s["period"]["planner"] = {{"plans", ps.plans},       {"searches", ps.searches},
                             {"failed", ps.failed},     {"known_unreachable", ps.known_unreachable},

@@ -182,12 +182,32 @@ int Daemon::Run() {
   start_ = clock_();
   scheduler_ = PeriodScheduler(scheduler_.period_ns(), Ns(start_));
   OpenRecorder();
+  ApplyScheduling(/*log_change=*/false);  // after the threads it starts: they keep normal scheduling
   ArmTimer();
-  std::fprintf(stderr, "<6>irslamd: ready can=%s socket=%s period=%.3fs time_scale=%g\n", bus_->name().c_str(),
-               options_.socket_path.c_str(), settings_.core.period_s, options_.time_scale);
+  std::fprintf(stderr, "<6>irslamd: ready can=%s socket=%s period=%.3fs time_scale=%g scheduling=%s\n",
+               bus_->name().c_str(), options_.socket_path.c_str(), settings_.core.period_s, options_.time_scale,
+               scheduling_.Describe(settings_.realtime_priority).c_str());
   notifier_.Send("READY=1\nSTATUS=state=idle");
   io_.run();
   return exit_status_;
+}
+
+void Daemon::ApplyScheduling(bool log_change) {
+  const int loop = settings_.realtime_priority;
+  const int api = loop > 1 ? loop - 1 : 0;
+  const std::string before = scheduling_.Describe(loop) + api_scheduling_.Describe(api);
+  scheduling_ = SetLoopScheduling(loop);
+  pthread_t api_thread;
+  if (api_ && api_->ApiThread(&api_thread)) api_scheduling_ = SetThreadScheduling(api_thread, api);
+  if (!scheduling_.error.empty() || !api_scheduling_.error.empty()) {
+    std::fprintf(stderr,
+                 "<4>irslamd: the control loop keeps normal scheduling: SCHED_FIFO %d refused (%s); "
+                 "set LimitRTPRIO= in the unit or control.realtime_priority = 0\n",
+                 loop, (scheduling_.error.empty() ? api_scheduling_.error : scheduling_.error).c_str());
+  } else if (log_change && scheduling_.Describe(loop) + api_scheduling_.Describe(api) != before) {
+    std::fprintf(stderr, "<5>irslamd: scheduling: control loop %s, API thread %s\n",
+                 scheduling_.Describe(loop).c_str(), api_scheduling_.Describe(api).c_str());
+  }
 }
 
 void Daemon::ArmTimer() {
@@ -344,6 +364,7 @@ void Daemon::ApplyOptions(DaemonSettings fresh) {
   if (foreign_.Present(WallNow())) core_->LatchFault(RobotNow(), kForeignCommanderReason);
   if (gpio_) gpio_->Replay();  // the new core learns the inputs' present levels
   scheduler_ = PeriodScheduler(PeriodNs(fresh.core, options_.time_scale), Ns(clock_()));
+  ApplyScheduling(/*log_change=*/true);
 }
 
 bool Daemon::MaySubscribe(const PeerCred& peer) {

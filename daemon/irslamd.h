@@ -27,6 +27,7 @@
 #include "daemon/foreign_commander.h"
 #include "daemon/map_service.h"
 #include "daemon/period_scheduler.h"
+#include "daemon/realtime.h"
 #include "daemon/rpc_methods.h"
 #include "daemon/sd_notifier.h"
 #include "daemon/wall_clock.h"
@@ -67,6 +68,8 @@ class Daemon : public ApiServer::Dispatcher {
   void Tick();
   // SIGHUP: re-reads the config file; a bad one changes nothing (one log line).
   void Reload();
+  // The loop thread's scheduling from settings_.realtime_priority (logged on a change).
+  void ApplyScheduling(bool log_change);
   // SIGTERM: wheels stopped, outputs off, the final save, everything closed.
   // Returns the exit status.
   int Shutdown();
@@ -142,6 +145,8 @@ class Daemon : public ApiServer::Dispatcher {
   boost::asio::signal_set signals_;
   PeriodScheduler scheduler_;
   double max_work_s_ = 0;
+  ThreadScheduling scheduling_;      // the loop thread's, after ApplyScheduling
+  ThreadScheduling api_scheduling_;  // the API thread's (one priority below)
   // Each period's work by phase (issue 15): the frames handled since the last
   // tick (SLAM) plus the tick itself, measured here around the core's calls.
   robot::TickProfile profile_;

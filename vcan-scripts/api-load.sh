@@ -18,7 +18,9 @@
 #   vcan-scripts/api-load.sh [SECONDS]      (IRSLAM_BUILD=dir of a built tree)
 #   API_LOAD_CLIENTS=0 vcan-scripts/api-load.sh   the same measurement without load
 #   API_LOAD_NICE=19 vcan-scripts/api-load.sh     the load client niced
-#   API_LOAD_RT=1 vcan-scripts/api-load.sh        irslamd under SCHED_FIFO (root)
+#   API_LOAD_RT=0 vcan-scripts/api-load.sh        irslamd's threads put back to normal
+#                                                 scheduling (irslamd makes its loop SCHED_FIFO 10
+#                                                 and its API thread 9 itself: realtime_priority)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 seconds=${1:-30}
@@ -31,9 +33,8 @@ mkdir -p "$out"
 sock=$run/irslamd.sock
 export NOTIFY_SOCKET=$run/notify WATCHDOG_USEC=2000000
 irslam_start "$run" "unix:$run/bus" "$sock" 1 "$out" "$IRSLAM_ROOT/tests/worlds/fig14.json"
-# API_LOAD_RT=1: irslamd's threads under SCHED_FIFO 10 (needs root): what the
-# loop would get with real-time scheduling from the unit.
-[ "${API_LOAD_RT:-}" = 1 ] && chrt -a -f -p 10 "${IRSLAM_PIDS[1]}"
+# API_LOAD_RT=0: every thread back to SCHED_OTHER, for comparison.
+if [ "${API_LOAD_RT:-}" = 0 ]; then chrt -a -o -p 0 "${IRSLAM_PIDS[1]}"; fi
 "$bin/daemon/irslamctl" --socket "$sock" start >/dev/null
 echo "api-load: mission started; ${seconds}s of hostile API load (time scale 1)" >&2
 
@@ -206,8 +207,9 @@ gaps = [b - a for a, b in zip(pings, pings[1:])]
 print("api-load: %.0f s of load, %d hostile clients + 1 measurer (re-subscribed %d times)" % (
     seconds, hostile, meas_evicted))
 print("  stop during the load: %s in %.1f ms" % (json.loads(reply.split(b'\n')[0]).get("result", reply[:80]), stop_ms))
-print("  period: target %.3f s, ticks %d (expected ~%d), overruns %d, work_max %.3f ms" % (
-    per["target"], per["ticks"], int(status["uptime"] / per["target"]), per["overruns"], per["work_max"] * 1e3))
+print("  period: target %.3f s, ticks %d (expected ~%d), overruns %d, work_max %.3f ms, loop scheduling: %s" % (
+    per["target"], per["ticks"], int(status["uptime"] / per["target"]), per["overruns"], per["work_max"] * 1e3,
+    per.get("scheduling", "?")))
 print("  jitter: mean %.3f ms, max %.3f ms; sampled %d periods: p50 %.3f ms, p99 %.3f ms, p99.9 %.3f ms, max %.3f ms" % (
     per["jitter_mean"] * 1e3, per["jitter_max"] * 1e3, len(js), pct(0.5), pct(0.99), pct(0.999),
     js[-1] * 1e3 if js else float('nan')))

@@ -1,5 +1,6 @@
 // Integration tests with the real processes: irslam-sim serve + irslamd + irslamctl
 // over the loopback bus (vcan0 when IRSLAM_TEST_CAN=vcan0), time-scaled.
+#include <sched.h>
 #include <signal.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
@@ -416,6 +417,48 @@ TEST_F(E2eTest, CtlWaitAndMapWork) {
   EXPECT_NE(testing::ReadFile(dir_ + "/map.svg").find("<svg"), std::string::npos);
   EXPECT_EQ(Ctl({"status", "--json"}, &out), 0);
   EXPECT_EQ(nlohmann::json::parse(out)["state"], "idle");
+}
+
+// A task's scheduling policy and real-time priority (/proc/PID/task/TID/stat fields 41, 40).
+std::pair<int, int> TaskPolicy(pid_t pid, const std::string& tid) {
+  const std::string stat = testing::ReadFile("/proc/" + std::to_string(pid) + "/task/" + tid + "/stat");
+  std::istringstream rest(stat.substr(stat.rfind(')') + 2));  // after "pid (comm) "
+  std::string field, rt_priority;
+  for (int i = 3; i <= 41 && rest >> field; ++i) {
+    if (i == 40) rt_priority = field;
+  }
+  return {std::stoi(field), std::stoi(rt_priority)};
+}
+
+TEST_F(E2eTest, TheLoopAndApiThreadsRunRealTimeTheWritersDoNotAndStatusSaysSo) {
+  StartAll();
+  std::string out;
+  ASSERT_EQ(Ctl({"status", "--json"}, &out), 0) << out;
+  const auto period = nlohmann::json::parse(out)["period"];
+  const std::string sched = period["scheduling"], api_sched = period["api_scheduling"];
+  const pid_t pid = daemon_.pid();
+  std::multiset<std::pair<int, int>> others;  // every thread but the loop's
+  int tasks = 0;
+  for (const auto& e : std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/task")) {
+    const std::string tid = e.path().filename();
+    const auto [policy, priority] = TaskPolicy(pid, tid);
+    ++tasks;
+    if (tid == std::to_string(pid)) {
+      EXPECT_EQ(policy == SCHED_FIFO && priority == 10, sched == "fifo 10") << sched;
+    } else {
+      others.insert({policy, priority});
+    }
+  }
+  EXPECT_GE(tasks, 3);  // the loop, the API thread, the map writer
+  if (sched == "fifo 10") {
+    EXPECT_EQ(api_sched, "fifo 9");
+    EXPECT_EQ(others.count({SCHED_FIFO, 9}), 1u);  // the API thread
+    EXPECT_EQ(others.count({SCHED_OTHER, 0}), others.size() - 1);  // the writers
+  } else {  // refused on this host: normal, and the reason given
+    EXPECT_EQ(sched.rfind("normal (SCHED_FIFO 10 refused: ", 0), 0u) << sched;
+    EXPECT_EQ(others.count({SCHED_OTHER, 0}), others.size());
+    EXPECT_NE(testing::ReadFile(dir_ + "/daemon.log").find("keeps normal scheduling"), std::string::npos);
+  }
 }
 
 TEST_F(E2eTest, WholeMissionOverTheBusEndsDoneWithTheRoomModelled) {
