@@ -178,6 +178,7 @@ class Mission {
     return clean_.Progress(t, distance_m);
   }
   const Clean& clean() const { return clean_; }
+  const Relocalize& reloc() const { return reloc_; }
   // Robot times at which wall-following loops of the room closed.
   const std::vector<double>& loop_times() const { return loop_times_; }
 

@@ -113,6 +113,9 @@ class RobotCore {
   // Cleaning cells finished since the mission started (0 when not cleaning).
   int cleaning_cells_done() const { return mission_.clean().progress().cells_done; }
   const slam::Slam& slam() const { return slam_; }
+  // The relocalisation search while the mission relocalises (its hypotheses;
+  // slam() is then the local map they place), else nullptr.
+  const slam::Relocalizer* relocalizer() const { return mission_.reloc().search(); }
   const drivers::MotorClient& motor() const { return motor_; }
   const drivers::IrConditioner& ir() const { return ir_; }
   const WheelCommand& last_command() const { return last_cmd_; }

@@ -18,6 +18,7 @@
 #include "tests/tools/clean_report.h"
 #include "tests/tools/metrics.h"
 #include "tests/tools/reloc_eval.h"
+#include "tests/tools/reloc_picture.h"
 #include "tests/tools/svg_chart.h"
 
 namespace irslam::report {
@@ -191,6 +192,31 @@ int RunRelocReport(const robot::CoreOptions& options, const std::string& worlds_
   return 0;
 }
 
+// Issue 14: one picture of the pose hypotheses (tests/tools/reloc_picture.h).
+int RunRelocPicture(const robot::CoreOptions& options, const std::string& worlds_dir, const std::string& name,
+                    uint64_t seed, const std::string& path) {
+  std::string error;
+  const auto w = sim::LoadWorldFile(worlds_dir + "/" + name + ".json", &error);
+  if (!w) {
+    std::fprintf(stderr, "irslam-report: %s\n", error.c_str());
+    return 2;
+  }
+  const metrics::RelocPicture p = metrics::CaptureHypotheses(*w, options, seed);
+  if (p.snapshot.t < 0) {
+    std::fprintf(stderr, "irslam-report: %s: no run went through an ambiguous moment before committing\n",
+                 name.c_str());
+    return 1;
+  }
+  if (!Write(path, metrics::HypothesesSvg(p))) {
+    std::fprintf(stderr, "irslam-report: cannot write %s\n", path.c_str());
+    return 1;
+  }
+  std::fprintf(stderr, "irslam-report: wrote %s (%s seed %llu: %zu hypotheses at %.1f s, committed at %.1f s)\n",
+               path.c_str(), name.c_str(), static_cast<unsigned long long>(p.seed), p.snapshot.hypotheses.size(),
+               p.snapshot.t, p.snapshot.commit_t);
+  return 0;
+}
+
 }  // namespace
 }  // namespace irslam::report
 
@@ -228,6 +254,10 @@ int main(int argc, char** argv) {
                  "poses per world (relocalization-results.md in --out; docs/relocalization.md)")
       ->check(CLI::Range(1, 1000));
   app.add_option("--reloc-worlds", reloc_worlds, "--reloc: the worlds (names in --worlds), comma-separated");
+  std::string reloc_picture;
+  app.add_option("--reloc-picture", reloc_picture,
+                 "Instead of the accuracy report: an SVG of relocalisation's pose hypotheses at their last "
+                 "ambiguous moment, in the first of --reloc-worlds, from --first-seed (docs/relocalization.md)");
   CLI11_PARSE(app, argc, argv);
   robot::CoreOptions defaults = robot::DefaultCoreOptions();
   if (!config_path.empty()) {
@@ -238,6 +268,10 @@ int main(int argc, char** argv) {
     }
   }
 
+  if (!reloc_picture.empty()) {
+    return RunRelocPicture(defaults, worlds_dir, reloc_worlds.substr(0, reloc_worlds.find(',')), first_seed,
+                           reloc_picture);
+  }
   if (reloc_runs > 0) return RunRelocReport(defaults, worlds_dir, reloc_worlds, reloc_runs, first_seed, out_dir);
   if (mode == "clean") {
     return RunCleanReport(defaults, worlds_dir,

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "sim/sim_run.h"
+#include "tests/tools/reloc_picture.h"
 
 namespace irslam::metrics {
 namespace {
@@ -138,6 +139,59 @@ TEST(RelocEvalTest, FreePoseSaysWhyNot) {
               std::string("expected X,Y,THETA (three numbers: metres, metres, radians), got '") +
                   bad + "'");
   }
+}
+
+// The hypotheses picture draws each hypothesis' placement of the local map: in
+// a 4 x 3 m room, a local wall seen 1 m in front of the start, placed by the
+// right hypothesis onto the saved wall (same pixels as the saved line) and by
+// the mirrored one onto the opposite wall; the legend lists them best first.
+TEST(RelocPictureTest, EachHypothesisPlacesTheLocalLinesThroughItsTransform) {
+  RelocPicture p;
+  p.world = "box";
+  p.saved_lines = {Line(1, {0, 0}, {4, 0}), Line(2, {4, 0}, {4, 3}), Line(3, {0, 3}, {4, 3}),
+                   Line(4, {0, 3}, {0, 0})};
+  p.map_to_world = {0, 0, 0};
+  HypothesisSnapshot& s = p.snapshot;
+  s.t = 12.5;
+  s.commit_t = 14;
+  s.evidence_m = 4;
+  // Local frame: the robot started at the origin facing +x; the wall 1 m
+  // to its right runs along x from -1 to 3.
+  s.local_lines = {Line(7, {-1, -1}, {3, -1})};
+  s.local_trajectory = {{0, {0, 0, 0}}, {10, {2, 0, 0}}};
+  slam::PoseHypothesis right, mirrored;
+  right.local_to_map = {1, 1, 0};  // start at (1, 1): the wall is y = 0
+  right.score = 0.9;
+  right.explained_m = 3.6;
+  mirrored.local_to_map = {3, 2, M_PI};  // start at (3, 2) facing -x: the wall is y = 3
+  mirrored.score = 0.4;
+  mirrored.explained_m = 1.6;
+  mirrored.conflict_m = 0.5;
+  s.hypotheses = {right, mirrored};
+  const std::string svg = HypothesesSvg(p);
+  // The saved bottom wall (0,0)-(4,0) and the first hypothesis' line
+  // (0,0)-(4,0) are the same polyline; the second's lies on the top wall,
+  // drawn from (4,3) to (0,3) (its end points turned by pi).
+  const auto count = [&](const std::string& needle) {
+    size_t n = 0;
+    for (size_t at = svg.find(needle); at != std::string::npos; at = svg.find(needle, at + 1)) ++n;
+    return n;
+  };
+  const auto points = [&](const std::string& a, const std::string& b) { return "points=\"" + a + " " + b + "\""; };
+  // View: x0 = y0 = -0.3 (the bounds grown by 0.3 m), scale = 560 / 4.6 px per m.
+  const double k = 560.0 / 4.6;
+  const auto px = [&](double x, double y) {
+    char b[64];
+    std::snprintf(b, sizeof b, "%.1f,%.1f", (x + 0.3) * k + 20, (3.6 * k + 40) - ((y + 0.3) * k + 20));
+    return std::string(b);
+  };
+  EXPECT_EQ(count(points(px(0, 0), px(4, 0))), 2u) << svg;  // the saved wall and hypothesis 1's line
+  EXPECT_EQ(count(points(px(4, 3), px(0, 3))), 1u) << svg;  // hypothesis 2's line
+  EXPECT_EQ(count(points(px(0, 3), px(4, 3)) + " stroke=\"#999\""), 1u) << svg;  // the saved top wall
+  EXPECT_NE(svg.find("#1: score 0.90 (explained 3.60 m, conflicting 0.00 m"), std::string::npos) << svg;
+  EXPECT_NE(svg.find("#2: score 0.40 (explained 1.60 m, conflicting 0.50 m"), std::string::npos) << svg;
+  EXPECT_LT(svg.find("#1: score"), svg.find("#2: score"));
+  EXPECT_NE(svg.find("the search at 12.5 s, 4.0 m of evidence, 2 hypotheses; committed at 14.0 s"), std::string::npos);
 }
 
 }  // namespace
