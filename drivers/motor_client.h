@@ -135,6 +135,16 @@ class MotorClient {
   static constexpr int kConfirm = 3;
   void CheckSeq(std::optional<uint8_t>* last, uint8_t seq, uint64_t* gaps);
   void ConfirmBumpers(uint8_t raw);
+  // A frame's controller time, or nullopt when it is rejected (counted): its
+  // stamp disagrees with its sequence number, is implausible, or is not after
+  // `last` (a duplicate or stale frame).
+  std::optional<double> FrameTime(SeqStampCheck* check, uint8_t seq, uint16_t stamp_ms,
+                                  double now_s, std::optional<double>* last);
+  // Handle's parts, one per message.
+  void HandleEncoder(const proto::EncoderCounts& e, double now_s, Event* ev);
+  void HandleIrA(const proto::IrA& a, double now_s);
+  void HandleIrB(const proto::IrB& b, Event* ev);
+  void HandleStatus(const proto::ControllerStatus& s, double now_s, Event* ev);
 
   MotorClientOptions options_;
   MotorClientCounters counters_;
