@@ -74,7 +74,7 @@ struct MotorClientCounters {
   uint64_t seq_gap_status = 0;
   uint64_t ir_unpaired = 0;     // IR_A/IR_B halves that never found their partner
   uint64_t controller_resets = 0;  // the controller's clock went back (it restarted)
-  // Implausible data, never passed on (see MotorClient::Handle).
+  // Implausible data, never passed on (see MotorClient::FrameTime, HandleEncoder).
   uint64_t duplicate = 0;           // a frame whose time was already seen
   uint64_t stale = 0;               // a frame older than one already taken (reordered/late)
   uint64_t implausible_time = 0;    // a time stamp far from where the controller's clock is
