@@ -51,6 +51,40 @@ bool ParseListen(const std::string& text, asio::ip::tcp::endpoint* ep, std::stri
   return true;
 }
 
+// The IR sensor mounts, range and robot radius from irslamd's config (the
+// default one when it exists and none is named).
+bool LoadRobot(std::string config_path, irslam::foxglove::RobotShape* robot, std::string* error) {
+  irslam::robot::CoreOptions core = irslam::robot::DefaultCoreOptions();
+  if (config_path.empty() && std::filesystem::exists(kDefaultConfig)) config_path = kDefaultConfig;
+  if (!config_path.empty() && !irslam::LoadCoreConfigFile(config_path, &core, error)) return false;
+  robot->mounts = core.slam.mounts;
+  robot->max_range_m = core.ir.max_range_m;
+  robot->radius_m = core.slam.geometry.radius_m;
+  return true;
+}
+
+// Listens on `endpoint` and says where; false after a message.
+bool Listen(Server* server, const asio::ip::tcp::endpoint& endpoint,
+            const std::string& socket_path) {
+  std::string error;
+  if (!server->Listen(endpoint, &error)) {
+    std::fprintf(stderr, "<3>irslam-foxglove: %s\n", error.c_str());
+    return false;
+  }
+  if (!endpoint.address().is_loopback()) {
+    std::fprintf(
+        stderr,
+        "<4>foxglove: listening on %s, not loopback: anyone who reaches it sees the robot's data\n",
+        endpoint.address().to_string().c_str());
+  }
+  const auto local = server->local_endpoint();
+  const std::string host = local.address().is_v6() ? "[" + local.address().to_string() + "]"
+                                                   : local.address().to_string();
+  std::fprintf(stderr, "<6>foxglove: listening on ws://%s:%u (irslamd at %s)\n", host.c_str(),
+               static_cast<unsigned>(local.port()), socket_path.c_str());
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -84,33 +118,14 @@ int main(int argc, char** argv) {
   options.socket_path = socket_path;
   options.status_rate_hz = rate;
   options.map_period_s = map_period;
-  irslam::robot::CoreOptions core = irslam::robot::DefaultCoreOptions();
-  if (config_path.empty() && std::filesystem::exists(kDefaultConfig)) config_path = kDefaultConfig;
-  if (!config_path.empty() && !irslam::LoadCoreConfigFile(config_path, &core, &error)) {
+  if (!LoadRobot(config_path, &options.robot, &error)) {
     std::fprintf(stderr, "irslam-foxglove: %s\n", error.c_str());
     return 2;
   }
-  options.robot.mounts = core.slam.mounts;
-  options.robot.max_range_m = core.ir.max_range_m;
-  options.robot.radius_m = core.slam.geometry.radius_m;
 
   asio::io_context io;
   Server server(io, irslam::foxglove::IrslamChannels());
-  if (!server.Listen(endpoint, &error)) {
-    std::fprintf(stderr, "<3>irslam-foxglove: %s\n", error.c_str());
-    return 1;
-  }
-  if (!endpoint.address().is_loopback()) {
-    std::fprintf(
-        stderr,
-        "<4>foxglove: listening on %s, not loopback: anyone who reaches it sees the robot's data\n",
-        endpoint.address().to_string().c_str());
-  }
-  const auto local = server.local_endpoint();
-  const std::string host = local.address().is_v6() ? "[" + local.address().to_string() + "]"
-                                                   : local.address().to_string();
-  std::fprintf(stderr, "<6>foxglove: listening on ws://%s:%u (irslamd at %s)\n", host.c_str(),
-               static_cast<unsigned>(local.port()), socket_path.c_str());
+  if (!Listen(&server, endpoint, socket_path)) return 1;
 
   Bridge bridge(io, &server, options);
   bridge.Start();

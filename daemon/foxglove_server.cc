@@ -1,3 +1,8 @@
+// The Foxglove WebSocket server (daemon/foxglove_server.h). A few lines over
+// the ~400-line bar (issue 10): nearly all of it is Session, one client's
+// connection (HTTP upgrade, the read loop of client ops, the write loop over
+// the bounded queue), whose handlers share that connection's state and
+// callbacks; Server itself is the ~90 lines at the end.
 #include "daemon/foxglove_server.h"
 
 #include <boost/asio/buffer.hpp>

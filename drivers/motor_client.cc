@@ -128,96 +128,107 @@ MotorClient::Event MotorClient::Handle(const can_frame& frame, double now_s) {
     }
     return ev;
   }
-  // Checked in this order, each rejection counted by reason; nothing rejected is
-  // passed on (so it never reaches SLAM): implausible time stamp, duplicate or
-  // stale (older than what was taken: reordered, late), impossible count jump.
-  const auto ordered = [this](double t, std::optional<double>* last) {
-    if (*last && t <= **last) {
-      ++(t == **last ? counters_.duplicate : counters_.stale);
-      return false;
-    }
-    return true;
-  };
   if (const auto* e = std::get_if<proto::EncoderCounts>(&r.message)) {
-    ++counters_.encoder_frames;
-    last_encoder_rx_ = now_s;  // the controller is there, whatever its data
-    if (!enc_check_.Accept(e->seq, clock_.Peek(e->timestamp_ms))) {
-      ++counters_.implausible_time;
-      return ev;
-    }
-    const auto t = ControllerTime(e->timestamp_ms, now_s);
-    if (!t || !ordered(*t, &last_enc_t_)) return ev;
-    if (options_.max_counts_per_s > 0 && last_enc_t_ && left_.initialized()) {
-      const double limit = options_.max_counts_per_s * (*t - *last_enc_t_) + kCountSlack;
-      const auto jump = [&](const Unwrapper16& u, uint16_t raw) {
-        return std::abs(static_cast<double>(u.Peek(raw) - u.value())) > limit;
-      };
-      if (jump(left_, e->left) || jump(right_, e->right)) {
-        ++counters_.implausible_counts;
-        // One bad frame is dropped; a jump that stays (kConfirm in a row) is a
-        // glitch of the counter itself: carry on from the new count.
-        if (++count_suspects_ < kConfirm) return ev;
-        left_.Rebase(left_.value());
-        right_.Rebase(right_.value());
-      }
-    }
-    count_suspects_ = 0;
-    CheckSeq(&seq_encoder_, e->seq, &counters_.seq_gap_encoder);
-    last_enc_t_ = t;
-    ev.ticks = WheelTicks{*t, left_.Update(e->left), right_.Update(e->right)};
+    HandleEncoder(*e, now_s, &ev);
   } else if (const auto* a = std::get_if<proto::IrA>(&r.message)) {
-    if (pending_ir_a_ && pending_ir_a_->seq == a->seq && pending_ir_a_->timestamp_ms == a->timestamp_ms) {
-      ++counters_.duplicate;
-      return ev;
-    }
-    if (pending_ir_a_) ++counters_.ir_unpaired;
-    pending_ir_a_.reset();
-    if (!ir_check_.Accept(a->seq, clock_.Peek(a->timestamp_ms))) {
-      ++counters_.implausible_time;
-      return ev;
-    }
-    const auto t = ControllerTime(a->timestamp_ms, now_s);
-    if (!t || !ordered(*t, &last_ir_t_)) return ev;
-    pending_ir_a_ = *a;
+    HandleIrA(*a, now_s);
   } else if (const auto* b = std::get_if<proto::IrB>(&r.message)) {
-    if (!pending_ir_a_ && last_ir_pair_seq_ == b->seq) {
-      ++counters_.duplicate;  // the B half of a sample already taken
-      return ev;
-    }
-    if (!pending_ir_a_ || pending_ir_a_->seq != b->seq) {
-      ++counters_.ir_unpaired;
-      if (pending_ir_a_) ++counters_.ir_unpaired;
-      pending_ir_a_.reset();
-      return ev;
-    }
-    CheckSeq(&seq_ir_, b->seq, &counters_.seq_gap_ir);
-    std::array<uint16_t, kNumIrSensors> adc{};
-    for (int i = 0; i < 3; ++i) adc[i] = pending_ir_a_->adc[i];
-    for (int i = 0; i < 4; ++i) adc[3 + i] = b->adc[i];
-    ev.ir_t = static_cast<double>(clock_.Peek(pending_ir_a_->timestamp_ms)) * 1e-3;
-    last_ir_t_ = ev.ir_t;
-    last_ir_pair_seq_ = b->seq;
-    ev.ir_adc = adc;
-    pending_ir_a_.reset();
-    ++counters_.ir_samples;
+    HandleIrB(*b, &ev);
   } else if (const auto* s = std::get_if<proto::ControllerStatus>(&r.message)) {
-    ++counters_.status_frames;
-    last_status_rx_ = now_s;
-    if (!status_check_.Accept(s->seq, clock_.Peek(s->timestamp_ms))) {
-      ++counters_.implausible_time;
-      return ev;
-    }
-    const auto t = ControllerTime(s->timestamp_ms, now_s);
-    if (!t || !ordered(*t, &last_status_t_)) return ev;
-    CheckSeq(&seq_status_, s->seq, &counters_.seq_gap_status);
-    last_status_ = *s;
-    ConfirmBumpers(s->bumpers);
-    ev.status = *s;
-    ev.bumpers = bumpers_;
+    HandleStatus(*s, now_s, &ev);
   } else {
     ++counters_.ignored;
   }
   return ev;
+}
+
+// Checked in this order, each rejection counted by reason; nothing rejected is
+// passed on (so it never reaches SLAM): implausible time stamp, duplicate or
+// stale (older than what was taken: reordered, late); the encoder frames then
+// for an impossible count jump.
+std::optional<double> MotorClient::FrameTime(SeqStampCheck* check, uint8_t seq, uint16_t stamp_ms,
+                                             double now_s, std::optional<double>* last) {
+  if (!check->Accept(seq, clock_.Peek(stamp_ms))) {
+    ++counters_.implausible_time;
+    return std::nullopt;
+  }
+  const auto t = ControllerTime(stamp_ms, now_s);
+  if (!t) return std::nullopt;
+  if (*last && *t <= **last) {
+    ++(*t == **last ? counters_.duplicate : counters_.stale);
+    return std::nullopt;
+  }
+  return t;
+}
+
+void MotorClient::HandleEncoder(const proto::EncoderCounts& e, double now_s, Event* ev) {
+  ++counters_.encoder_frames;
+  last_encoder_rx_ = now_s;  // the controller is there, whatever its data
+  const auto t = FrameTime(&enc_check_, e.seq, e.timestamp_ms, now_s, &last_enc_t_);
+  if (!t) return;
+  if (options_.max_counts_per_s > 0 && last_enc_t_ && left_.initialized()) {
+    const double limit = options_.max_counts_per_s * (*t - *last_enc_t_) + kCountSlack;
+    const auto jump = [&](const Unwrapper16& u, uint16_t raw) {
+      return std::abs(static_cast<double>(u.Peek(raw) - u.value())) > limit;
+    };
+    if (jump(left_, e.left) || jump(right_, e.right)) {
+      ++counters_.implausible_counts;
+      // One bad frame is dropped; a jump that stays (kConfirm in a row) is a
+      // glitch of the counter itself: carry on from the new count.
+      if (++count_suspects_ < kConfirm) return;
+      left_.Rebase(left_.value());
+      right_.Rebase(right_.value());
+    }
+  }
+  count_suspects_ = 0;
+  CheckSeq(&seq_encoder_, e.seq, &counters_.seq_gap_encoder);
+  last_enc_t_ = t;
+  ev->ticks = WheelTicks{*t, left_.Update(e.left), right_.Update(e.right)};
+}
+
+void MotorClient::HandleIrA(const proto::IrA& a, double now_s) {
+  if (pending_ir_a_ && pending_ir_a_->seq == a.seq &&
+      pending_ir_a_->timestamp_ms == a.timestamp_ms) {
+    ++counters_.duplicate;
+    return;
+  }
+  if (pending_ir_a_) ++counters_.ir_unpaired;
+  pending_ir_a_.reset();
+  if (FrameTime(&ir_check_, a.seq, a.timestamp_ms, now_s, &last_ir_t_)) pending_ir_a_ = a;
+}
+
+void MotorClient::HandleIrB(const proto::IrB& b, Event* ev) {
+  if (!pending_ir_a_ && last_ir_pair_seq_ == b.seq) {
+    ++counters_.duplicate;  // the B half of a sample already taken
+    return;
+  }
+  if (!pending_ir_a_ || pending_ir_a_->seq != b.seq) {
+    ++counters_.ir_unpaired;
+    if (pending_ir_a_) ++counters_.ir_unpaired;
+    pending_ir_a_.reset();
+    return;
+  }
+  CheckSeq(&seq_ir_, b.seq, &counters_.seq_gap_ir);
+  std::array<uint16_t, kNumIrSensors> adc{};
+  for (int i = 0; i < 3; ++i) adc[i] = pending_ir_a_->adc[i];
+  for (int i = 0; i < 4; ++i) adc[3 + i] = b.adc[i];
+  ev->ir_t = static_cast<double>(clock_.Peek(pending_ir_a_->timestamp_ms)) * 1e-3;
+  last_ir_t_ = ev->ir_t;
+  last_ir_pair_seq_ = b.seq;
+  ev->ir_adc = adc;
+  pending_ir_a_.reset();
+  ++counters_.ir_samples;
+}
+
+void MotorClient::HandleStatus(const proto::ControllerStatus& s, double now_s, Event* ev) {
+  ++counters_.status_frames;
+  last_status_rx_ = now_s;
+  if (!FrameTime(&status_check_, s.seq, s.timestamp_ms, now_s, &last_status_t_)) return;
+  CheckSeq(&seq_status_, s.seq, &counters_.seq_gap_status);
+  last_status_ = s;
+  ConfirmBumpers(s.bumpers);
+  ev->status = s;
+  ev->bumpers = bumpers_;
 }
 
 can_frame MotorClient::MakeCommand(const WheelCommand& cmd) {

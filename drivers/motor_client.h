@@ -74,7 +74,7 @@ struct MotorClientCounters {
   uint64_t seq_gap_status = 0;
   uint64_t ir_unpaired = 0;     // IR_A/IR_B halves that never found their partner
   uint64_t controller_resets = 0;  // the controller's clock went back (it restarted)
-  // Implausible data, never passed on (see MotorClient::Handle).
+  // Implausible data, never passed on (see MotorClient::FrameTime, HandleEncoder).
   uint64_t duplicate = 0;           // a frame whose time was already seen
   uint64_t stale = 0;               // a frame older than one already taken (reordered/late)
   uint64_t implausible_time = 0;    // a time stamp far from where the controller's clock is
@@ -135,6 +135,16 @@ class MotorClient {
   static constexpr int kConfirm = 3;
   void CheckSeq(std::optional<uint8_t>* last, uint8_t seq, uint64_t* gaps);
   void ConfirmBumpers(uint8_t raw);
+  // A frame's controller time, or nullopt when it is rejected (counted): its
+  // stamp disagrees with its sequence number, is implausible, or is not after
+  // `last` (a duplicate or stale frame).
+  std::optional<double> FrameTime(SeqStampCheck* check, uint8_t seq, uint16_t stamp_ms,
+                                  double now_s, std::optional<double>* last);
+  // Handle's parts, one per message.
+  void HandleEncoder(const proto::EncoderCounts& e, double now_s, Event* ev);
+  void HandleIrA(const proto::IrA& a, double now_s);
+  void HandleIrB(const proto::IrB& b, Event* ev);
+  void HandleStatus(const proto::ControllerStatus& s, double now_s, Event* ev);
 
   MotorClientOptions options_;
   MotorClientCounters counters_;

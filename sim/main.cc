@@ -156,85 +156,80 @@ static int64_t ThreadCpuNs() {
   return static_cast<int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
 }
 
-int Run(const Common& c, double max_time, const std::string& map_out, const std::string& svg_out,
-        const std::string& lines_out, const std::string& events_out, const std::string& tick_clock) {
-  World world;
-  robot::CoreOptions core_opts;
-  uint64_t seed;
-  FaultSpec faults;
-  RunSetup setup;
-  if (!Load(c, &world, &core_opts, &seed) || !LoadFaults(c, &faults) ||
-      !LoadRunSetup(c, faults, &world, &core_opts, &setup))
-    return kExitUsage;
-  // Cleaning has its own time budget after the exploration's.
-  if (max_time <= 0) {
-    max_time = core_opts.mission.max_time_s +
-               (core_opts.mission.mode == "clean" ? core_opts.mission.cleaning.max_time_s : 0);
+// run's optional logs (an empty path: not asked for): every extracted line
+// observation (irslam-weights reads them) and every change of mission state,
+// reason or behaviour, with the true and the estimated pose (world frame / map
+// frame).
+class RunLogs {
+ public:
+  bool Open(const std::string& lines_out, const std::string& events_out) {
+    return OpenOut(lines_out, &lines_file_) && OpenOut(events_out, &events_file_);
   }
-  // Optional outputs (an empty path: not asked for).
-  const auto open_out = [](const std::string& path, std::ofstream* out) {
+
+  void Record(const InProcessRun& r) {
+    if (events_file_.is_open()) RecordEvent(r);
+    const auto& s = r.core->slam();
+    if (!lines_file_.is_open() || s.stats().windows == windows_seen_) return;
+    windows_seen_ = s.stats().windows;
+    for (const auto& l : s.last_window_lines()) {
+      lines_file_ << nlohmann::json{{"t", r.t},
+                                    {"rho", l.rho},
+                                    {"theta", l.theta},
+                                    {"length", l.length},
+                                    {"c_rho_rho", l.cov(0, 0)},
+                                    {"c_theta_theta", l.cov(1, 1)},
+                                    {"points", l.points}}
+                         .dump()
+                  << "\n";
+    }
+  }
+
+ private:
+  static bool OpenOut(const std::string& path, std::ofstream* out) {
     if (path.empty()) return true;
     out->open(path);
     if (!*out) std::fprintf(stderr, "irslam-sim: cannot write %s\n", path.c_str());
     return static_cast<bool>(*out);
-  };
-  // Every extracted line observation (irslam-weights reads them).
-  std::ofstream lines_file;
-  if (!open_out(lines_out, &lines_file)) return 1;
-  // Optionally record every change of mission state, reason or behaviour, with
-  // the true and the estimated pose (world frame / map frame).
-  std::ofstream events_file;
-  if (!open_out(events_out, &events_file)) return 1;
-  std::string last_event;
-  int windows_seen = 0;
-  auto record = [&](const InProcessRun& r) {
-    if (events_file.is_open()) {
-      const auto st = ToJson(r.core->Status(r.t));
-      const std::string key = st["state"].dump() + st["reason"].dump() + st["behaviour"].dump();
-      if (key != last_event) {
-        last_event = key;
-        const Pose2& p = r.sim->true_pose();
-        events_file << nlohmann::json{{"t", r.t},
-                                      {"state", st["state"]},
-                                      {"reason", st["reason"]},
-                                      {"behaviour", st["behaviour"]},
-                                      {"target_object", st["target_object"]},
-                                      {"true_pose", {p.x, p.y, p.theta}},
-                                      {"pose", st["pose"]}}
-                                .dump()
-                         << "\n";
-      }
-    }
-    const auto& s = r.core->slam();
-    if (!lines_file.is_open() || s.stats().windows == windows_seen) return;
-    windows_seen = s.stats().windows;
-    for (const auto& l : s.last_window_lines()) {
-      lines_file << nlohmann::json{{"t", r.t}, {"rho", l.rho}, {"theta", l.theta},
-                                   {"length", l.length}, {"c_rho_rho", l.cov(0, 0)},
-                                   {"c_theta_theta", l.cov(1, 1)}, {"points", l.points}}
+  }
+
+  void RecordEvent(const InProcessRun& r) {
+    const auto st = ToJson(r.core->Status(r.t));
+    const std::string key = st["state"].dump() + st["reason"].dump() + st["behaviour"].dump();
+    if (key == last_event_) return;
+    last_event_ = key;
+    const Pose2& p = r.sim->true_pose();
+    events_file_ << nlohmann::json{{"t", r.t},
+                                   {"state", st["state"]},
+                                   {"reason", st["reason"]},
+                                   {"behaviour", st["behaviour"]},
+                                   {"target_object", st["target_object"]},
+                                   {"true_pose", {p.x, p.y, p.theta}},
+                                   {"pose", st["pose"]}}
                         .dump()
                  << "\n";
-    }
-  };
-  InProcessRun run = RunInProcess(world, core_opts, seed, max_time, record, faults.any() ? &faults : nullptr,
-                                  tick_clock == "cpu" ? robot::WorkClockNs(ThreadCpuNs) : robot::WorkClockNs(),
-                                  setup);
-  if (!run.error.empty()) {
-    std::fprintf(stderr, "irslam-sim: cannot start the mission: %s\n", run.error.c_str());
-    return 1;
   }
+
+  std::ofstream lines_file_;
+  std::ofstream events_file_;
+  std::string last_event_;
+  int windows_seen_ = 0;
+};
+
+// run's result files: the map, the truth, and the optional SVG and PGM; false
+// after a one-line message.
+bool WriteRunFiles(const Common& c, const InProcessRun& run, const std::string& map_out,
+                   const std::string& svg_out) {
   const SimController& sim = *run.sim;
   const robot::RobotCore& core = *run.core;
-  const double t = run.t;
   if (!WriteJson(map_out, ToJson(core.Map()))) {
     std::fprintf(stderr, "irslam-sim: cannot write %s\n", map_out.c_str());
-    return 1;
+    return false;
   }
   nlohmann::json truth = sim.Truth();
   if (run.faults) truth["faults"] = FaultsJson(run.faults->counters());
   if (!WriteJson(c.truth_out, truth)) {
     std::fprintf(stderr, "irslam-sim: cannot write %s\n", c.truth_out.c_str());
-    return 1;
+    return false;
   }
   if (!svg_out.empty()) {
     std::string error;
@@ -243,35 +238,45 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
     svg << RenderMapSvg(ToJson(core.Map()), sim.Truth(), world_json.value_or(nlohmann::json()));
     if (!svg) {
       std::fprintf(stderr, "irslam-sim: cannot write %s\n", svg_out.c_str());
-      return 1;
+      return false;
     }
   }
   if (std::string error; !c.pgm_out.empty() && !WritePgmMap(ToJson(core.Map()), c.pgm_out, c.pgm_res, &error)) {
     std::fprintf(stderr, "irslam-sim: %s\n", error.c_str());
-    return 1;
+    return false;
   }
-  const auto status = ToJson(core.Status(t));
+  return true;
+}
+
+// The control loop's work per period (issue 15), this process's clock.
+void PrintWorkProfile(const InProcessRun& run) {
+  const auto& w = run.profile.work();
+  const auto& worst = run.profile.worst();
+  std::fprintf(
+      stderr,
+      "irslam-sim: work per period p50 %.3f ms, p99 %.3f ms, p99.9 %.3f ms, max %.3f ms "
+      "(at %.2f s, mostly %s: slam %.3f, mission %.3f, planning %.3f ms); %.0fx real time\n",
+      w.Quantile(0.5) * 1e-6, w.Quantile(0.99) * 1e-6, w.Quantile(0.999) * 1e-6, w.max() * 1e-6,
+      run.profile.worst_t(), robot::ToString(run.profile.worst_phase()),
+      worst[robot::TickPhase::kSlam] * 1e-6, worst[robot::TickPhase::kMission] * 1e-6,
+      worst[robot::TickPhase::kPlanning] * 1e-6, run.wall_s > 0 ? run.t / run.wall_s : 0.0);
+  std::fprintf(stderr,
+               "irslam-sim: largest per phase: slam %.3f ms, mission %.3f ms, planning %.3f ms\n",
+               run.profile.phase_max(robot::TickPhase::kSlam) * 1e-6,
+               run.profile.phase_max(robot::TickPhase::kMission) * 1e-6,
+               run.profile.phase_max(robot::TickPhase::kPlanning) * 1e-6);
+}
+
+// run's summary on stderr: the outcome, the work per period, the faults and
+// the cleaning.
+void PrintRunSummary(const InProcessRun& run, const nlohmann::json& status) {
+  const SimController& sim = *run.sim;
   std::fprintf(stderr,
                "irslam-sim: %s after %.1f s robot time, %.1f m driven, %llu collisions, "
                "min clearance %.3f m\n",
-               status["state"].get<std::string>().c_str(), t, core.slam().distance_m(),
+               status["state"].get<std::string>().c_str(), run.t, run.core->slam().distance_m(),
                static_cast<unsigned long long>(sim.collisions()), sim.min_clearance());
-  {
-    // The control loop's work per period (issue 15), this process's clock.
-    const auto& w = run.profile.work();
-    const auto& worst = run.profile.worst();
-    std::fprintf(stderr,
-                 "irslam-sim: work per period p50 %.3f ms, p99 %.3f ms, p99.9 %.3f ms, max %.3f ms "
-                 "(at %.2f s, mostly %s: slam %.3f, mission %.3f, planning %.3f ms); %.0fx real time\n",
-                 w.Quantile(0.5) * 1e-6, w.Quantile(0.99) * 1e-6, w.Quantile(0.999) * 1e-6, w.max() * 1e-6,
-                 run.profile.worst_t(), robot::ToString(run.profile.worst_phase()),
-                 worst[robot::TickPhase::kSlam] * 1e-6, worst[robot::TickPhase::kMission] * 1e-6,
-                 worst[robot::TickPhase::kPlanning] * 1e-6, run.wall_s > 0 ? t / run.wall_s : 0.0);
-    std::fprintf(stderr, "irslam-sim: largest per phase: slam %.3f ms, mission %.3f ms, planning %.3f ms\n",
-                 run.profile.phase_max(robot::TickPhase::kSlam) * 1e-6,
-                 run.profile.phase_max(robot::TickPhase::kMission) * 1e-6,
-                 run.profile.phase_max(robot::TickPhase::kPlanning) * 1e-6);
-  }
+  PrintWorkProfile(run);
   if (run.faults) {
     std::fprintf(stderr, "irslam-sim: injected %s; irslamd's frame counters: %s\n",
                  FaultsJson(run.faults->counters()).dump().c_str(), status["frames"].dump().c_str());
@@ -287,10 +292,42 @@ int Run(const Common& c, double max_time, const std::string& map_out, const std:
                  cl["path_m"].get<double>(), cl["unreachable_m2"].get<double>(),
                  cl["cross_track_rms_m"].get<double>());
   }
-  if (core.state() != control::MissionState::kDone) {
-    std::fprintf(stderr, "irslam-sim: mission did not finish: state %s, %s\n",
-                 status["state"].get<std::string>().c_str(),
-                 t >= max_time ? "--max-time reached" : status["reason"].get<std::string>().c_str());
+}
+
+int Run(const Common& c, double max_time, const std::string& map_out, const std::string& svg_out,
+        const std::string& lines_out, const std::string& events_out,
+        const std::string& tick_clock) {
+  World world;
+  robot::CoreOptions core_opts;
+  uint64_t seed;
+  FaultSpec faults;
+  RunSetup setup;
+  if (!Load(c, &world, &core_opts, &seed) || !LoadFaults(c, &faults) ||
+      !LoadRunSetup(c, faults, &world, &core_opts, &setup))
+    return kExitUsage;
+  // Cleaning has its own time budget after the exploration's.
+  if (max_time <= 0) {
+    max_time = core_opts.mission.max_time_s +
+               (core_opts.mission.mode == "clean" ? core_opts.mission.cleaning.max_time_s : 0);
+  }
+  RunLogs logs;
+  if (!logs.Open(lines_out, events_out)) return 1;
+  InProcessRun run = RunInProcess(
+      world, core_opts, seed, max_time, [&logs](const InProcessRun& r) { logs.Record(r); },
+      faults.any() ? &faults : nullptr,
+      tick_clock == "cpu" ? robot::WorkClockNs(ThreadCpuNs) : robot::WorkClockNs(), setup);
+  if (!run.error.empty()) {
+    std::fprintf(stderr, "irslam-sim: cannot start the mission: %s\n", run.error.c_str());
+    return 1;
+  }
+  if (!WriteRunFiles(c, run, map_out, svg_out)) return 1;
+  const auto status = ToJson(run.core->Status(run.t));
+  PrintRunSummary(run, status);
+  if (run.core->state() != control::MissionState::kDone) {
+    std::fprintf(
+        stderr, "irslam-sim: mission did not finish: state %s, %s\n",
+        status["state"].get<std::string>().c_str(),
+        run.t >= max_time ? "--max-time reached" : status["reason"].get<std::string>().c_str());
     return 1;
   }
   return 0;

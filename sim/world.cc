@@ -51,6 +51,120 @@ bool InsideRoom(const World& w, const Box& o) {
   return true;
 }
 
+// ParseWorld's parts, in the order it checks them; each false after setting
+// *error.
+bool CheckKnownKeys(const json& j, std::string* error) {
+  for (const auto& [key, value] : j.items()) {
+    static constexpr std::string_view kKnown[] = {"name",  "room", "outline", "objects",
+                                                  "start", "seed", "noise"};
+    if (std::find(std::begin(kKnown), std::end(kKnown), key) == std::end(kKnown)) {
+      *error = "world: \"" + key + "\" is not a known key";
+      return false;
+    }
+  }
+  return true;
+}
+
+// "outline" (an axis-aligned polygon) or else "room" (a rectangle).
+bool ReadOutline(const json& j, World* w, std::string* error) {
+  std::vector<double> v;
+  if (!j.contains("outline")) {
+    if (!j.contains("room") || !ReadNumbers(j["room"], 2, &v) || v[0] <= 0.5 || v[1] <= 0.5) {
+      *error = "world: \"room\" must be [width, height] in metres (each > 0.5)";
+      return false;
+    }
+    w->outline = {{0, 0}, {v[0], 0}, {v[0], v[1]}, {0, v[1]}};
+    return true;
+  }
+  const json& o = j["outline"];
+  if (!o.is_array() || o.size() < 4) {
+    *error = "world: \"outline\" must be a closed polygon of at least 4 [x, y] points";
+    return false;
+  }
+  for (size_t i = 0; i < o.size(); ++i) {
+    if (!ReadNumbers(o[i], 2, &v)) {
+      *error = "world: \"outline\"[" + std::to_string(i) + "] must be [x, y]";
+      return false;
+    }
+    w->outline.push_back({v[0], v[1]});
+  }
+  for (size_t i = 0; i < w->outline.size(); ++i) {
+    const Vec2 a = w->outline[i], b = w->outline[(i + 1) % w->outline.size()];
+    if (a.x != b.x && a.y != b.y) {
+      *error = "world: \"outline\" edge " + std::to_string(i) + " is not axis-aligned";
+      return false;
+    }
+  }
+  return true;
+}
+
+bool ReadObjects(const json& j, World* w, std::string* error) {
+  if (!j.contains("objects")) return true;
+  const json& o = j["objects"];
+  if (!o.is_array()) {
+    *error = "world: \"objects\" must be an array of [xmin, ymin, xmax, ymax]";
+    return false;
+  }
+  std::vector<double> v;
+  for (size_t i = 0; i < o.size(); ++i) {
+    if (!ReadNumbers(o[i], 4, &v) || v[2] <= v[0] || v[3] <= v[1]) {
+      *error = "world: \"objects\"[" + std::to_string(i) +
+               "] must be [xmin, ymin, xmax, ymax] with xmin < xmax and ymin < ymax";
+      return false;
+    }
+    w->objects.push_back({v[0], v[1], v[2], v[3]});
+  }
+  return true;
+}
+
+// "start", inside the room and outside every object, each object inside the room.
+bool ReadStart(const json& j, World* w, std::string* error) {
+  std::vector<double> v;
+  if (!j.contains("start") || !ReadNumbers(j["start"], 3, &v)) {
+    *error = "world: \"start\" must be [x, y, theta]";
+    return false;
+  }
+  w->start = {v[0], v[1], NormalizeAngle(v[2])};
+  const Box b = w->Bounds();
+  if (w->start.x <= b.xmin || w->start.x >= b.xmax || w->start.y <= b.ymin ||
+      w->start.y >= b.ymax) {
+    *error = "world: \"start\" lies outside the room";
+    return false;
+  }
+  for (size_t i = 0; i < w->objects.size(); ++i) {
+    const Box& o = w->objects[i];
+    const std::string which = "world: \"objects\"[" + std::to_string(i) + "]";
+    if (!InsideRoom(*w, o)) {
+      *error = which + " lies outside the room";
+      return false;
+    }
+    if (w->start.x > o.xmin && w->start.x < o.xmax && w->start.y > o.ymin && w->start.y < o.ymax) {
+      *error = "world: \"start\" lies inside " + which.substr(7);
+      return false;
+    }
+  }
+  return true;
+}
+
+// The optional "seed" and "noise".
+bool ReadSeedAndNoise(const json& j, World* w, std::string* error) {
+  if (j.contains("seed")) {
+    if (!j["seed"].is_number_integer()) {
+      *error = "world: \"seed\" must be an integer";
+      return false;
+    }
+    w->seed = j["seed"].get<uint64_t>();
+  }
+  if (j.contains("noise")) {
+    if (!options::ReadObject(j["noise"], "noise", options::Bind(&w->noise, SimNoiseKeys()),
+                             error)) {
+      *error = "world: " + *error;
+      return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 options::Table<SimNoise> SimNoiseKeys() {
@@ -113,15 +227,8 @@ std::optional<World> ParseWorld(std::string_view text, std::string* error) {
     *error = "world: the top level must be an object";
     return std::nullopt;
   }
-  for (const auto& [key, value] : j.items()) {
-    static constexpr std::string_view kKnown[] = {"name", "room", "outline", "objects", "start", "seed", "noise"};
-    if (std::find(std::begin(kKnown), std::end(kKnown), key) == std::end(kKnown)) {
-      *error = "world: \"" + key + "\" is not a known key";
-      return std::nullopt;
-    }
-  }
+  if (!CheckKnownKeys(j, error)) return std::nullopt;
   World w;
-  std::vector<double> v;
   if (j.contains("name")) {
     if (!j.at("name").is_string()) {
       *error = "world: \"name\" must be a string";
@@ -129,83 +236,9 @@ std::optional<World> ParseWorld(std::string_view text, std::string* error) {
     }
     w.name = j["name"].get<std::string>();
   }
-  if (j.contains("outline")) {
-    const json& o = j["outline"];
-    if (!o.is_array() || o.size() < 4) {
-      *error = "world: \"outline\" must be a closed polygon of at least 4 [x, y] points";
-      return std::nullopt;
-    }
-    for (size_t i = 0; i < o.size(); ++i) {
-      if (!ReadNumbers(o[i], 2, &v)) {
-        *error = "world: \"outline\"[" + std::to_string(i) + "] must be [x, y]";
-        return std::nullopt;
-      }
-      w.outline.push_back({v[0], v[1]});
-    }
-    for (size_t i = 0; i < w.outline.size(); ++i) {
-      const Vec2 a = w.outline[i], b = w.outline[(i + 1) % w.outline.size()];
-      if (a.x != b.x && a.y != b.y) {
-        *error = "world: \"outline\" edge " + std::to_string(i) + " is not axis-aligned";
-        return std::nullopt;
-      }
-    }
-  } else {
-    if (!j.contains("room") || !ReadNumbers(j["room"], 2, &v) || v[0] <= 0.5 || v[1] <= 0.5) {
-      *error = "world: \"room\" must be [width, height] in metres (each > 0.5)";
-      return std::nullopt;
-    }
-    w.outline = {{0, 0}, {v[0], 0}, {v[0], v[1]}, {0, v[1]}};
-  }
-  if (j.contains("objects")) {
-    const json& o = j["objects"];
-    if (!o.is_array()) {
-      *error = "world: \"objects\" must be an array of [xmin, ymin, xmax, ymax]";
-      return std::nullopt;
-    }
-    for (size_t i = 0; i < o.size(); ++i) {
-      if (!ReadNumbers(o[i], 4, &v) || v[2] <= v[0] || v[3] <= v[1]) {
-        *error = "world: \"objects\"[" + std::to_string(i) +
-                 "] must be [xmin, ymin, xmax, ymax] with xmin < xmax and ymin < ymax";
-        return std::nullopt;
-      }
-      w.objects.push_back({v[0], v[1], v[2], v[3]});
-    }
-  }
-  if (!j.contains("start") || !ReadNumbers(j["start"], 3, &v)) {
-    *error = "world: \"start\" must be [x, y, theta]";
+  if (!ReadOutline(j, &w, error) || !ReadObjects(j, &w, error) || !ReadStart(j, &w, error) ||
+      !ReadSeedAndNoise(j, &w, error))
     return std::nullopt;
-  }
-  w.start = {v[0], v[1], NormalizeAngle(v[2])};
-  const Box b = w.Bounds();
-  if (w.start.x <= b.xmin || w.start.x >= b.xmax || w.start.y <= b.ymin || w.start.y >= b.ymax) {
-    *error = "world: \"start\" lies outside the room";
-    return std::nullopt;
-  }
-  for (size_t i = 0; i < w.objects.size(); ++i) {
-    const Box& o = w.objects[i];
-    const std::string which = "world: \"objects\"[" + std::to_string(i) + "]";
-    if (!InsideRoom(w, o)) {
-      *error = which + " lies outside the room";
-      return std::nullopt;
-    }
-    if (w.start.x > o.xmin && w.start.x < o.xmax && w.start.y > o.ymin && w.start.y < o.ymax) {
-      *error = "world: \"start\" lies inside " + which.substr(7);
-      return std::nullopt;
-    }
-  }
-  if (j.contains("seed")) {
-    if (!j["seed"].is_number_integer()) {
-      *error = "world: \"seed\" must be an integer";
-      return std::nullopt;
-    }
-    w.seed = j["seed"].get<uint64_t>();
-  }
-  if (j.contains("noise")) {
-    if (!options::ReadObject(j["noise"], "noise", options::Bind(&w.noise, SimNoiseKeys()), error)) {
-      *error = "world: " + *error;
-      return std::nullopt;
-    }
-  }
   return w;
 }
 

@@ -1,3 +1,13 @@
+// The relocaliser (the method: slam/relocalizer.h) and its option table.
+// Longer than the ~400-line bar (issue 10) on purpose: apart from the key
+// table (~40 lines) it is one algorithm over two private value types, the
+// saved map in its axis frame (SavedMap, AxisSegment) and the local evidence
+// (LocalEvidence, LocalLine): preparing both, placing, voting (BestOffsets),
+// scoring (Explained, Score), refining (Refine) and keeping distinct
+// hypotheses, in the order of the header's method description. Every step
+// reads those same types, which are private to this file; split across files
+// they would need a private header shared by parts with no interface of their
+// own between them.
 #include "slam/relocalizer.h"
 
 #include <Eigen/Cholesky>
@@ -431,6 +441,93 @@ bool SamePose(const RelocalizeOptions& options, const Pose2& a, const Pose2& b) 
          std::abs(NormalizeAngle(a.theta - b.theta)) < options.distinct_rad;
 }
 
+// A translation candidate, before it is scored fully.
+struct Candidate {
+  Pose2 t;  // local -> saved axis frame
+  double explained;
+};
+
+// The candidates for the local map turned by `rotation` onto the saved axes:
+// the best offsets per coordinate from the line votes, combined.
+void AddCandidates(const RelocalizeOptions& options, const SavedMap& saved,
+                   const LocalEvidence& local, double rotation,
+                   std::vector<std::pair<double, double>>* scratch,
+                   std::vector<Candidate>* candidates) {
+  const Rigid turn(Pose2{0, 0, rotation});
+  std::vector<Vote> votes[2];   // [k]: offsets along coordinate k (from lines with dir 1 - k)
+  std::vector<Vote> slides[2];  // [k]: end-to-end alignments along coordinate k (lines with dir k)
+  Vec2 path_mean = Vec2::Zero();
+  for (const Vec2& p : local.path) path_mean += turn(p) / static_cast<double>(local.path.size());
+  for (const LocalLine& l : local.lines) {
+    const AxisSegment s = Place(options, turn, l).seg;
+    if (s.dir < 0) continue;
+    for (const AxisSegment& m : saved.segments) {
+      if (m.dir != s.dir || !SidesAgree(m.side, s.side)) continue;
+      const double w = std::min(s.length(), m.length());
+      votes[1 - s.dir].push_back({m.offset - s.offset, w});
+      slides[s.dir].push_back({m.lo - s.lo, w});
+      slides[s.dir].push_back({m.hi - s.hi, w});
+    }
+  }
+  std::vector<double> offsets[2];
+  for (int k = 0; k < 2; ++k) {
+    offsets[k] =
+        BestOffsets(std::move(votes[k]), options.line_tolerance_m, options.offsets_per_axis);
+    // No line constrains this coordinate (lines of one direction only, never
+    // committed): the local lines slid along the saved ones, ends aligned.
+    if (offsets[k].empty()) {
+      offsets[k] =
+          BestOffsets(std::move(slides[k]), options.line_tolerance_m, options.offsets_per_axis);
+    }
+    if (offsets[k].empty()) offsets[k].push_back((saved.min[k] + saved.max[k]) / 2 - path_mean[k]);
+  }
+  for (double x : offsets[0]) {
+    for (double y : offsets[1]) {
+      const Pose2 t{x, y, rotation};
+      candidates->push_back({t, ExplainedOnly(options, saved, local, t, scratch)});
+    }
+  }
+}
+
+// The best `count` distinct candidates by explained length.
+std::vector<Pose2> BestDistinct(const RelocalizeOptions& options, std::vector<Candidate> candidates,
+                                size_t count) {
+  std::stable_sort(
+      candidates.begin(), candidates.end(),
+      [](const Candidate& a, const Candidate& b) { return a.explained > b.explained; });
+  std::vector<Pose2> chosen;
+  for (const Candidate& c : candidates) {
+    if (chosen.size() >= count) break;
+    if (std::none_of(chosen.begin(), chosen.end(),
+                     [&](const Pose2& p) { return SamePose(options, p, c.t); })) {
+      chosen.push_back(c.t);
+    }
+  }
+  return chosen;
+}
+
+void SortByScore(std::vector<PoseHypothesis>* hypotheses) {
+  std::stable_sort(
+      hypotheses->begin(), hypotheses->end(),
+      [](const PoseHypothesis& a, const PoseHypothesis& b) { return a.score > b.score; });
+}
+
+// The first `count` hypotheses (in their order) that are not the same pose as
+// one before them.
+std::vector<PoseHypothesis> Distinct(const RelocalizeOptions& options,
+                                     const std::vector<PoseHypothesis>& hypotheses, size_t count) {
+  std::vector<PoseHypothesis> distinct;
+  for (const PoseHypothesis& h : hypotheses) {
+    if (distinct.size() >= count) break;
+    if (std::none_of(distinct.begin(), distinct.end(), [&](const PoseHypothesis& k) {
+          return SamePose(options, k.local_to_map, h.local_to_map);
+        })) {
+      distinct.push_back(h);
+    }
+  }
+  return distinct;
+}
+
 }  // namespace
 
 options::Table<RelocalizeOptions> RelocalizeKeys() {
@@ -508,78 +605,20 @@ void Relocalizer::Update(const std::vector<LineFeature>& local_lines,
   hypotheses_.clear();
   if (local.lines.empty() || saved.segments.empty()) return;
 
-  struct Candidate {
-    Pose2 t;  // local -> saved axis frame
-    double explained;
-  };
   std::vector<Candidate> candidates;
   std::vector<std::pair<double, double>> scratch;
   for (int r = 0; r < 4; ++r) {
-    const double rotation = NormalizeAngle(-local.axis_rad + r * M_PI / 2);
-    const Rigid turn(Pose2{0, 0, rotation});
-    std::vector<Vote> votes[2];  // [k]: offsets along coordinate k (from lines with dir 1 - k)
-    std::vector<Vote>
-        slides[2];  // [k]: end-to-end alignments along coordinate k (lines with dir k)
-    Vec2 path_mean = Vec2::Zero();
-    for (const Vec2& p : local.path) path_mean += turn(p) / static_cast<double>(local.path.size());
-    for (const LocalLine& l : local.lines) {
-      const AxisSegment s = Place(options_, turn, l).seg;
-      if (s.dir < 0) continue;
-      for (const AxisSegment& m : saved.segments) {
-        if (m.dir != s.dir || !SidesAgree(m.side, s.side)) continue;
-        const double w = std::min(s.length(), m.length());
-        votes[1 - s.dir].push_back({m.offset - s.offset, w});
-        slides[s.dir].push_back({m.lo - s.lo, w});
-        slides[s.dir].push_back({m.hi - s.hi, w});
-      }
-    }
-    std::vector<double> offsets[2];
-    for (int k = 0; k < 2; ++k) {
-      offsets[k] =
-          BestOffsets(std::move(votes[k]), options_.line_tolerance_m, options_.offsets_per_axis);
-      // No line constrains this coordinate (lines of one direction only, never
-      // committed): the local lines slid along the saved ones, ends aligned.
-      if (offsets[k].empty()) {
-        offsets[k] =
-            BestOffsets(std::move(slides[k]), options_.line_tolerance_m, options_.offsets_per_axis);
-      }
-      if (offsets[k].empty())
-        offsets[k].push_back((saved.min[k] + saved.max[k]) / 2 - path_mean[k]);
-    }
-    for (double x : offsets[0]) {
-      for (double y : offsets[1]) {
-        const Pose2 t{x, y, rotation};
-        candidates.push_back({t, ExplainedOnly(options_, saved, local, t, &scratch)});
-      }
-    }
+    AddCandidates(options_, saved, local, NormalizeAngle(-local.axis_rad + r * M_PI / 2), &scratch,
+                  &candidates);
   }
-  std::stable_sort(
-      candidates.begin(), candidates.end(),
-      [](const Candidate& a, const Candidate& b) { return a.explained > b.explained; });
   // The best distinct candidates by explained length are scored fully.
-  const size_t to_score = 3 * static_cast<size_t>(options_.max_hypotheses);
-  std::vector<Pose2> chosen;
-  for (const Candidate& c : candidates) {
-    if (chosen.size() >= to_score) break;
-    if (std::none_of(chosen.begin(), chosen.end(),
-                     [&](const Pose2& p) { return SamePose(options_, p, c.t); })) {
-      chosen.push_back(c.t);
-    }
-  }
+  const std::vector<Pose2> chosen = BestDistinct(options_, std::move(candidates),
+                                                 3 * static_cast<size_t>(options_.max_hypotheses));
   std::vector<PoseHypothesis> scored;
   scored.reserve(chosen.size());
   for (const Pose2& t : chosen) scored.push_back(Score(options_, saved, local, t));
-  std::stable_sort(
-      scored.begin(), scored.end(),
-      [](const PoseHypothesis& a, const PoseHypothesis& b) { return a.score > b.score; });
-  for (const PoseHypothesis& h : scored) {
-    if (static_cast<int>(hypotheses_.size()) >= options_.max_hypotheses) break;
-    if (std::none_of(hypotheses_.begin(), hypotheses_.end(), [&](const PoseHypothesis& k) {
-          return SamePose(options_, k.local_to_map, h.local_to_map);
-        })) {
-      hypotheses_.push_back(h);
-    }
-  }
+  SortByScore(&scored);
+  hypotheses_ = Distinct(options_, scored, static_cast<size_t>(options_.max_hypotheses));
   // The kept ones refined (unless that lowers the score by more than a
   // rounding of the explained intervals), and those that met merged again.
   const Pose2 to_axis{0, 0, -saved.axis_rad};
@@ -588,18 +627,8 @@ void Relocalizer::Update(const std::vector<LineFeature>& local_lines,
     const PoseHypothesis r = Score(options_, saved, local, refined);
     if (r.score >= h.score - 0.02) h = r;
   }
-  std::stable_sort(
-      hypotheses_.begin(), hypotheses_.end(),
-      [](const PoseHypothesis& a, const PoseHypothesis& b) { return a.score > b.score; });
-  std::vector<PoseHypothesis> distinct;
-  for (const PoseHypothesis& h : hypotheses_) {
-    if (std::none_of(distinct.begin(), distinct.end(), [&](const PoseHypothesis& k) {
-          return SamePose(options_, k.local_to_map, h.local_to_map);
-        })) {
-      distinct.push_back(h);
-    }
-  }
-  hypotheses_ = std::move(distinct);
+  SortByScore(&hypotheses_);
+  hypotheses_ = Distinct(options_, hypotheses_, hypotheses_.size());
 }
 
 std::optional<PoseHypothesis> Relocalizer::Decision() const {
