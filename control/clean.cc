@@ -41,6 +41,9 @@ void Clean::Reset() {
   plan_ = {};
   grid_ = {};
   phase_ = Phase::kDone;
+  stage_ = PlanStage::kNone;
+  resume_.reset();
+  resumed_cells_ = 0;
 }
 
 Clean::Clean(CleaningOptions options, GoToOptions go_to, const RobotGeometry& geometry,
@@ -50,44 +53,125 @@ Clean::Clean(CleaningOptions options, GoToOptions go_to, const RobotGeometry& ge
       mounts_(mounts),
       go_to_(CleaningGoTo(go_to, options), geometry, mounts) {}
 
-void Clean::Begin(double t, const slam::Slam& slam, const EnvironmentModel& m,
-                  const BumpMemory& bumps) {
+void Clean::Begin(double t, const slam::Slam& slam, const EnvironmentModel& m, const BumpMemory& bumps,
+                  std::optional<CleaningProgress> resume) {
   progress_ = {};
   progress_.state = CleanState::kCleaning;
   progress_.started_t = t;
   progress_.cleaning_width_m = options_.cleaning_width_m;
   plan_ = {};
-  const double rot = slam.map_rotation();
+  resume_ = std::move(resume);
+  resumed_cells_ = 0;
+  if (resume_) {
+    // Until planned, the cells done before are the progress (a stop now keeps them).
+    progress_.cells = resume_->cells;
+    progress_.cells_done = resume_->cells_done;
+    progress_.cells_total = resume_->cells_total;
+  }
+  stage_ = PlanStage::kCells;
   if (m.room.box) {
+    const double rot = slam.map_rotation();
     std::vector<Box> objects;
     for (const auto& o : m.objects) objects.push_back(o.box);
     std::vector<Eigen::Vector2d> contacts;
     for (const auto& p : bumps.points()) contacts.push_back(RotateVector(p, rot));
     const Pose2 me = slam.map_pose();
-    plan_ = PlanCoverage(*m.room.box, objects, contacts, {me.x, me.y}, radius_m_, options_);
-    grid_.Init(*m.room.box, plan_.FreeRects(), 0.5 * options_.cleaning_width_m,
-               options_.coverage_cell_m);
+    room_ = *m.room.box;
+    planner_.Start(room_, objects, contacts, {me.x, me.y}, radius_m_, options_);
+    stage_ = PlanStage::kCoverage;
   }
-  for (size_t i = 0; i < plan_.order.size(); ++i) {
-    const CoverageCell& c = plan_.cells[static_cast<size_t>(plan_.order[i])];
-    std::vector<Eigen::Vector2d> outline = c.Outline(0.5 * options_.cleaning_width_m);
-    if (plan_.swapped) {
-      for (auto& p : outline) p = Eigen::Vector2d(p.y(), p.x());
-      std::reverse(outline.begin(), outline.end());  // counter-clockwise again
-    }
-    progress_.cells.push_back({c.id, std::move(outline), plan_.routes[i], false, false});
-  }
-  progress_.cells_total = static_cast<int>(plan_.order.size());
-  progress_.total_m2 = grid_.total_m2();
   cell_ = 0;
   point_ = 0;
   failures_ = 0;
   start_distance_ = slam.distance_m();
   cross_sq_ = 0;
   cross_n_ = 0;
-  phase_ = plan_.order.empty() ? Phase::kDone : Phase::kPlanGoal;
+  phase_ = Phase::kDone;  // (planning)
   progress_t_ = t;
   progress_at_ = {slam.map_pose().x, slam.map_pose().y};
+}
+
+bool Clean::Plan(double t) {
+  // Pieces until this period's share of the work is spent (at least one).
+  double spent = 0;
+  while (planning() && spent < options_.plan_work_per_period) spent += PlanStep(t);
+  return !planning();
+}
+
+double Clean::PlanStep(double t) {
+  switch (stage_) {
+    case PlanStage::kNone:
+      return 0;
+    case PlanStage::kCoverage: {
+      const double before = planner_.work();
+      if (planner_.Step()) {
+        plan_ = planner_.Take();
+        free_rects_ = plan_.FreeRects();
+        grid_.Reset(room_, 0.5 * options_.cleaning_width_m, options_.coverage_cell_m);
+        stage_next_ = 0;
+        stage_ = free_rects_.empty() ? PlanStage::kCells : PlanStage::kGrid;
+      }
+      return planner_.work() - before;
+    }
+    case PlanStage::kGrid: {
+      // One free rectangle: the grid cells within the body's radius of it.
+      const Box& b = free_rects_[stage_next_++];
+      const double grow = 0.5 * options_.cleaning_width_m, c = options_.coverage_cell_m;
+      grid_.AddTarget(b);
+      if (stage_next_ >= free_rects_.size()) stage_ = PlanStage::kCells;
+      return ((b.width() + 2 * grow) / c + 2) * ((b.height() + 2 * grow) / c + 2);
+    }
+    case PlanStage::kCells: {
+      double work = 0;
+      progress_.cells.clear();
+      for (size_t i = 0; i < plan_.order.size(); ++i) {
+        const CoverageCell& c = plan_.cells[static_cast<size_t>(plan_.order[i])];
+        std::vector<Eigen::Vector2d> outline = c.Outline(0.5 * options_.cleaning_width_m);
+        if (plan_.swapped) {
+          for (auto& p : outline) p = Eigen::Vector2d(p.y(), p.x());
+          std::reverse(outline.begin(), outline.end());  // counter-clockwise again
+        }
+        work += static_cast<double>(outline.size() + plan_.routes[i].size());
+        progress_.cells.push_back({c.id, std::move(outline), plan_.routes[i], false, false});
+      }
+      progress_.cells_done = 0;
+      progress_.cells_total = static_cast<int>(plan_.order.size());
+      progress_.total_m2 = grid_.total_m2();
+      stage_next_ = 0;
+      if (resume_ && !progress_.cells.empty()) {
+        stage_ = PlanStage::kResume;
+      } else {
+        Started(t);
+      }
+      return work;
+    }
+    case PlanStage::kResume: {
+      // A cleaning stopped before (not finished) goes on with the cells it left.
+      const size_t i = stage_next_++;
+      const bool done = ResumeCell(i, *resume_);
+      resumed_cells_ += done;
+      if (stage_next_ >= progress_.cells.size()) Started(t);
+      if (!done) return static_cast<double>(resume_->cells.size()) * 20;  // the polygons compared
+      // Its route marked: a disc of grid cells every quarter of the cleaning width.
+      const auto& r = plan_.routes[i];
+      double len = 0;
+      for (size_t k = 1; k < r.size(); ++k) len += (r[k] - r[k - 1]).norm();
+      const double disc = options_.cleaning_width_m / options_.coverage_cell_m + 2;
+      return (len / (0.25 * options_.cleaning_width_m) + static_cast<double>(r.size())) * disc * disc;
+    }
+  }
+  return 0;
+}
+
+void Clean::Started(double t) {
+  stage_ = PlanStage::kNone;
+  free_rects_.clear();
+  resume_.reset();
+  cell_ = 0;
+  point_ = 0;
+  failures_ = 0;
+  SkipDone();
+  progress_t_ = t;
 }
 
 void Clean::SetState(CleanState s, double t, double distance_m) {
@@ -159,31 +243,25 @@ Eigen::Vector2d PolygonCentre(const std::vector<Eigen::Vector2d>& p) {
 
 }  // namespace
 
-int Clean::Resume(const CleaningProgress& before) {
-  int taken = 0;
-  for (size_t i = 0; i < progress_.cells.size(); ++i) {
-    auto& pc = progress_.cells[i];
-    const double area = PolygonArea(pc.polygon);
-    const bool was_done = std::any_of(before.cells.begin(), before.cells.end(), [&](const auto& b) {
-      if (!b.done || b.polygon.size() < 3 || pc.polygon.size() < 3) return false;
-      const double ba = PolygonArea(b.polygon);
-      return room_geometry::InsidePolygon(pc.polygon, PolygonCentre(b.polygon)) && std::abs(ba - area) <= 0.25 * area;
-    });
-    if (!was_done) continue;
-    pc.done = true;
-    ++progress_.cells_done;
-    ++taken;
-    // Its route counts as swept (the coverage estimate marks the body's path).
-    const auto& r = plan_.routes[i];
-    for (size_t k = 1; k < r.size(); ++k) {
-      const double len = (r[k] - r[k - 1]).norm();
-      const int n = std::max(1, static_cast<int>(len / (0.25 * options_.cleaning_width_m)));
-      for (int j = 0; j <= n; ++j) grid_.Mark(r[k - 1] + (r[k] - r[k - 1]) * (static_cast<double>(j) / n));
-    }
+bool Clean::ResumeCell(size_t i, const CleaningProgress& before) {
+  auto& pc = progress_.cells[i];
+  const double area = PolygonArea(pc.polygon);
+  const bool was_done = std::any_of(before.cells.begin(), before.cells.end(), [&](const auto& b) {
+    if (!b.done || b.polygon.size() < 3 || pc.polygon.size() < 3) return false;
+    const double ba = PolygonArea(b.polygon);
+    return room_geometry::InsidePolygon(pc.polygon, PolygonCentre(b.polygon)) && std::abs(ba - area) <= 0.25 * area;
+  });
+  if (!was_done) return false;
+  pc.done = true;
+  ++progress_.cells_done;
+  // Its route counts as swept (the coverage estimate marks the body's path).
+  const auto& r = plan_.routes[i];
+  for (size_t k = 1; k < r.size(); ++k) {
+    const double len = (r[k] - r[k - 1]).norm();
+    const int n = std::max(1, static_cast<int>(len / (0.25 * options_.cleaning_width_m)));
+    for (int j = 0; j <= n; ++j) grid_.Mark(r[k - 1] + (r[k] - r[k - 1]) * (static_cast<double>(j) / n));
   }
-  cell_ = 0;
-  SkipDone();
-  return taken;
+  return true;
 }
 
 namespace {
@@ -262,6 +340,10 @@ Twist Clean::Follow(const Pose2& me, const RangeScan& scan, bool* blocked, bool*
 
 Clean::Result Clean::Step(double t, const slam::Slam& slam, const RangeScan& raw_scan,
                           uint8_t bumpers, const BumpMemory& bumps, const WallFollower& follower) {
+  if (planning()) {
+    Plan(t);  // (the mission plans in its own step: this is only a fallback)
+    return {};
+  }
   const Pose2 me = slam.map_pose();
   grid_.Mark({me.x, me.y});
   const double rot = slam.map_rotation();

@@ -1,5 +1,6 @@
 // Cleaning the modelled room: plans the coverage once on entering (coverage.h,
-// bounded by the room's size), then drives each cell's route with a
+// bounded by the room's size; a bounded piece per control period while the
+// robot holds still), then drives each cell's route with a
 // cross-track controller (the heading is corrected towards the lane in
 // proportion to the distance off it; the error is reported), while SLAM goes on
 // correcting the pose. Between cells, and round anything the lanes run into that
@@ -14,6 +15,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -74,8 +76,23 @@ class Clean {
   Clean(CleaningOptions options, GoToOptions go_to, const RobotGeometry& geometry,
         const std::array<SensorMount, kNumIrSensors>& mounts);
 
-  // Plans the coverage of the modelled room (once) and starts at its first cell.
-  void Begin(double t, const slam::Slam& slam, const EnvironmentModel& m, const BumpMemory& bumps);
+  // Starts planning the coverage of the modelled room (once), from where the
+  // robot is now and the contacts remembered now. The planning is done by Plan,
+  // a bounded piece per control period (issue 15); then the cleaning starts at
+  // the first cell not done. `resume`: a cleaning stopped before (issue 13; the
+  // saved map's or the live map's progress) goes on: each planned cell that
+  // matches a cell done then (its outline's centre inside this cell's outline,
+  // areas within a quarter) is done now, its route counted as swept, and the
+  // tour skips it (resumed_cells counts them).
+  void Begin(double t, const slam::Slam& slam, const EnvironmentModel& m, const BumpMemory& bumps,
+             std::optional<CleaningProgress> resume = std::nullopt);
+  // Planning (Begin was called, the plan is not complete): the robot holds still.
+  bool planning() const { return stage_ != PlanStage::kNone; }
+  // This period's share of the planning (plan_work_per_period; at least one
+  // piece); true when it is complete (Step drives from then).
+  bool Plan(double t);
+  // Cells of the plan taken as done from the cleaning resumed (known once planned).
+  int resumed_cells() const { return resumed_cells_; }
   Result Step(double t, const slam::Slam& slam, const RangeScan& raw_scan, uint8_t bumpers,
               const BumpMemory& bumps, const WallFollower& follower);
   // The mission's state changed: returning home, finished or stopped.
@@ -85,12 +102,6 @@ class Clean {
   CleaningProgress Progress(double t, double distance_m) const;
   const CoveragePlan& plan() const { return plan_; }
   void Reset();
-  // Resumes a cleaning stopped before (issue 13; the saved map's or the live
-  // map's progress): after Begin, each planned cell that matches a cell done
-  // then (its outline's centre inside this cell's outline, areas within a
-  // quarter) is done now, its route counted as swept, and the tour skips it.
-  // Returns the number of cells taken as done.
-  int Resume(const CleaningProgress& before);
   // Driving was interrupted (issue 14: relocalising after the map disagreed):
   // the next Step plans its way to the current route point again.
   void Interrupted(double t);
@@ -100,9 +111,19 @@ class Clean {
 
  private:
   enum class Phase { kPlanGoal, kTransit, kSweep, kDone };
+  // Planning, in this order: the coverage plan (CoveragePlanner), the
+  // covered-floor grid (a few free rectangles per step), the progress's cells,
+  // the cells done before (one per step).
+  enum class PlanStage { kNone, kCoverage, kGrid, kCells, kResume };
+  // Whether the planned cell i was done in `before` (its route then marks the grid).
+  bool ResumeCell(size_t i, const CleaningProgress& before);
+  // One piece of the planning; returns its work (CleaningOptions::plan_work_per_period).
+  double PlanStep(double t);
+  // The plan is complete: the cleaning starts (at t).
+  void Started(double t);
   // The current cell is finished (swept, or its rest given up).
   void NextCell(bool unreachable);
-  // Moves cell_ past cells already done (Resume).
+  // Moves cell_ past cells already done (resumed).
   void SkipDone();
   // The nearest point of the current cell's free space, 5 cm inside its
   // boundary where it is that wide (the route points of a pushed-out edge pass
@@ -120,6 +141,13 @@ class Clean {
   std::array<SensorMount, kNumIrSensors> mounts_;
   GoTo go_to_;
   CoveragePlan plan_;
+  CoveragePlanner planner_;
+  PlanStage stage_ = PlanStage::kNone;
+  Box room_;                      // the room planned for
+  std::vector<Box> free_rects_;   // the plan's free space (grid targets)
+  size_t stage_next_ = 0;         // the next rectangle or cell of the stage
+  std::optional<CleaningProgress> resume_;
+  int resumed_cells_ = 0;
   CoverageGrid grid_;
   CleaningProgress progress_;
   Phase phase_ = Phase::kDone;

@@ -30,6 +30,9 @@ options::Table<CleaningOptions> CleaningKeys() {
        "go round each cell along its walls and furniture before its lanes"},
       {"max_cells", &O::max_cells, 1, 10000, "", "cells of the decomposition at most"},
       {"two_opt_rounds", &O::two_opt_rounds, 0, 1000, "", "improvement passes over the tour"},
+      {"plan_work_per_period", &O::plan_work_per_period, 1000, 1e9, "",
+       "coverage planning done per control period at most (at least one step), in work units (a grid cell "
+       "examined, about a third of a distance: 3-5 ns here); the robot holds still until the plan is complete"},
       {"sweep_speed_mps", &O::sweep_speed_mps, 0.01, 2, "m/s", "speed along a lane"},
       {"k_cross", &O::k_cross, 0, 100, "rad/m",
        "lane following: heading correction per metre off the lane"},
@@ -235,15 +238,16 @@ namespace {
 Box Swap(const Box& b) { return {b.ymin, b.xmin, b.ymax, b.xmax}; }
 Eigen::Vector2d Swap(const Eigen::Vector2d& p) { return {p.y(), p.x()}; }
 
-// The plan with lanes along y (swap: along x, by planning in the frame with x
-// and y swapped and swapping the routes back).
-CoveragePlan PlanOriented(Box room, std::vector<Box> objects, std::vector<Eigen::Vector2d> bumps,
-                          Eigen::Vector2d start, double radius, const CleaningOptions& o, bool swap) {
+// The plan's frame and constants and its cells, with lanes along y (swap: along
+// x, by planning in the frame with x and y swapped; the routes are swapped back
+// by EndRoutes). *start: the robot's place in that frame.
+CoveragePlan DecomposeOriented(Box room, std::vector<Box> objects, std::vector<Eigen::Vector2d> bumps,
+                               Eigen::Vector2d* start, double radius, const CleaningOptions& o, bool swap) {
   if (swap) {
     room = Swap(room);
     for (auto& b : objects) b = Swap(b);
     for (auto& p : bumps) p = Swap(p);
-    start = Swap(start);
+    *start = Swap(*start);
   }
   CoveragePlan plan;
   plan.swapped = swap;
@@ -263,14 +267,21 @@ CoveragePlan PlanOriented(Box room, std::vector<Box> objects, std::vector<Eigen:
     obstacles.push_back({p.x() - gb, p.y() - gb, p.x() + gb, p.y() + gb});
   }
   plan.cells = Decompose(plan.free, obstacles, o);
-  const size_t n = plan.cells.size();
-  if (n == 0) return plan;
-  // The tour over the cells' middles: greedy nearest neighbour from the robot ...
-  std::vector<Eigen::Vector2d> mid(n);
-  for (size_t i = 0; i < n; ++i) {
-    const auto& s = plan.cells[i].slabs;
+  return plan;
+}
+
+// The tour over the cells' middles: greedy nearest neighbour from the robot ...
+std::vector<Eigen::Vector2d> CellMiddles(const std::vector<CoverageCell>& cells) {
+  std::vector<Eigen::Vector2d> mid(cells.size());
+  for (size_t i = 0; i < cells.size(); ++i) {
+    const auto& s = cells[i].slabs;
     mid[i] = {0.5 * (s.front().x0 + s.back().x1), 0.5 * (s[s.size() / 2].ylo + s[s.size() / 2].yhi)};
   }
+  return mid;
+}
+
+std::vector<int> GreedyTour(const std::vector<Eigen::Vector2d>& mid, const Eigen::Vector2d& start) {
+  const size_t n = mid.size();
   std::vector<int> order;
   std::vector<bool> used(n, false);
   Eigen::Vector2d at = start;
@@ -283,47 +294,75 @@ CoveragePlan PlanOriented(Box room, std::vector<Box> objects, std::vector<Eigen:
     order.push_back(static_cast<int>(best));
     at = mid[best];
   }
-  // ... then 2-opt on the open path from the robot (segment reversals).
-  const auto pos = [&](int k) { return k < 0 ? start : mid[static_cast<size_t>(order[static_cast<size_t>(k)])]; };
-  for (int round = 0; round < o.two_opt_rounds; ++round) {
-    bool better = false;
-    const int m = static_cast<int>(n);
-    for (int i = 0; i < m - 1; ++i) {
-      for (int j = i + 1; j < m; ++j) {
-        // Reverse order[i..j]: edges (i-1,i) and (j,j+1) become (i-1,j) and (i,j+1).
-        double before = Gap(pos(i - 1), pos(i)), after = Gap(pos(i - 1), pos(j));
-        if (j + 1 < m) {
-          before += Gap(pos(j), pos(j + 1));
-          after += Gap(pos(i), pos(j + 1));
-        }
-        if (after < before - 1e-9) {
-          std::reverse(order.begin() + i, order.begin() + j + 1);
-          better = true;
-        }
+  return order;
+}
+
+// ... then 2-opt on the open path from the robot (segment reversals): one
+// round; false if it found nothing better.
+bool TwoOptRound(const std::vector<Eigen::Vector2d>& mid, const Eigen::Vector2d& start, std::vector<int>* order) {
+  const auto pos = [&](int k) { return k < 0 ? start : mid[static_cast<size_t>((*order)[static_cast<size_t>(k)])]; };
+  bool better = false;
+  const int m = static_cast<int>(mid.size());
+  for (int i = 0; i < m - 1; ++i) {
+    for (int j = i + 1; j < m; ++j) {
+      // Reverse order[i..j]: edges (i-1,i) and (j,j+1) become (i-1,j) and (i,j+1).
+      double before = Gap(pos(i - 1), pos(i)), after = Gap(pos(i - 1), pos(j));
+      if (j + 1 < m) {
+        before += Gap(pos(j), pos(j + 1));
+        after += Gap(pos(i), pos(j + 1));
+      }
+      if (after < before - 1e-9) {
+        std::reverse(order->begin() + i, order->begin() + j + 1);
+        better = true;
       }
     }
-    if (!better) break;
   }
-  // Each cell entered from the corner nearest where the last route ended.
-  at = start;
-  for (int ci : order) {
-    std::vector<Eigen::Vector2d> best;
-    for (int corner = 0; corner < 4; ++corner) {
-      auto r = SweepRoute(plan.cells[static_cast<size_t>(ci)], plan.lane_spacing_m, corner & 1,
-                          corner & 2, o.edge_pass, plan.edge_out_m);
-      if (best.empty() || Gap(at, r.front()) < Gap(at, best.front())) best = std::move(r);
-    }
-    plan.transit_length_m += Gap(at, best.front());
-    for (size_t k = 1; k < best.size(); ++k) plan.route_length_m += Gap(best[k - 1], best[k]);
-    at = best.back();
-    plan.routes.push_back(std::move(best));
+  return better;
+}
+
+// The route of the tour's next cell, entered from the corner nearest *at
+// (where the last route ended; moved to where this one ends).
+void AddRoute(CoveragePlan* plan, int ci, const CleaningOptions& o, Eigen::Vector2d* at) {
+  std::vector<Eigen::Vector2d> best;
+  for (int corner = 0; corner < 4; ++corner) {
+    auto r = SweepRoute(plan->cells[static_cast<size_t>(ci)], plan->lane_spacing_m, corner & 1, corner & 2,
+                        o.edge_pass, plan->edge_out_m);
+    if (best.empty() || Gap(*at, r.front()) < Gap(*at, best.front())) best = std::move(r);
   }
+  plan->transit_length_m += Gap(*at, best.front());
+  for (size_t k = 1; k < best.size(); ++k) plan->route_length_m += Gap(best[k - 1], best[k]);
+  *at = best.back();
+  plan->routes.push_back(std::move(best));
+}
+
+// The routes back in the map frame.
+void EndRoutes(CoveragePlan* plan) {
+  if (!plan->swapped) return;
+  for (auto& r : plan->routes)
+    for (auto& p : r) p = Swap(p);
+}
+
+// The whole plan of one orientation, in one go.
+CoveragePlan PlanOriented(const Box& room, const std::vector<Box>& objects, const std::vector<Eigen::Vector2d>& bumps,
+                          Eigen::Vector2d start, double radius, const CleaningOptions& o, bool swap) {
+  CoveragePlan plan = DecomposeOriented(room, objects, bumps, &start, radius, o, swap);
+  if (plan.cells.empty()) return plan;
+  const std::vector<Eigen::Vector2d> mid = CellMiddles(plan.cells);
+  std::vector<int> order = GreedyTour(mid, start);
+  for (int round = 0; round < o.two_opt_rounds; ++round) {
+    if (!TwoOptRound(mid, start, &order)) break;
+  }
+  Eigen::Vector2d at = start;
+  for (int ci : order) AddRoute(&plan, ci, o, &at);
   plan.order = std::move(order);
-  if (swap) {
-    for (auto& r : plan.routes)
-      for (auto& p : r) p = Swap(p);
-  }
+  EndRoutes(&plan);
   return plan;
+}
+
+// Lanes along x (a) or along y (b): the shorter, ties to along y.
+bool Shorter(const CoveragePlan& a, const CoveragePlan& b) {
+  const auto cost = [](const CoveragePlan& p) { return p.route_length_m + p.transit_length_m; };
+  return cost(a) < cost(b) - 1e-9;
 }
 
 }  // namespace
@@ -345,11 +384,101 @@ CoveragePlan PlanCoverage(const Box& room, const std::vector<Box>& objects,
   CoveragePlan along_y = PlanOriented(room, objects, bumps, start, radius, o, false);
   if (!o.both_directions) return along_y;
   CoveragePlan along_x = PlanOriented(room, objects, bumps, start, radius, o, true);
-  const auto cost = [](const CoveragePlan& p) { return p.route_length_m + p.transit_length_m; };
-  return cost(along_x) < cost(along_y) - 1e-9 ? along_x : along_y;
+  return Shorter(along_x, along_y) ? along_x : along_y;
+}
+
+void CoveragePlanner::Start(const Box& room, const std::vector<Box>& objects,
+                            const std::vector<Eigen::Vector2d>& bumps, const Eigen::Vector2d& start, double radius,
+                            const CleaningOptions& o) {
+  room_ = room;
+  objects_ = objects;
+  bumps_ = bumps;
+  start_ = start;
+  radius_m_ = radius;
+  options_ = o;
+  swap_ = false;
+  plan_ = {};
+  along_y_.reset();
+  steps_ = 0;
+  work_ = 0;
+  stage_ = Stage::kDecompose;
+}
+
+bool CoveragePlanner::Step() {
+  if (stage_ == Stage::kIdle || stage_ == Stage::kDone) return stage_ == Stage::kDone;
+  ++steps_;
+  const double n = static_cast<double>(plan_.cells.size());
+  switch (stage_) {
+    case Stage::kDecompose: {
+      const double m = static_cast<double>(objects_.size() +
+                                           std::min(bumps_.size(), static_cast<size_t>(options_.max_bump_obstacles)));
+      work_ += 3 * (2 + 2 * m) * (m + 1);  // the slabs' x-edges against every box
+      oriented_start_ = start_;
+      plan_ = DecomposeOriented(room_, objects_, bumps_, &oriented_start_, radius_m_, options_, swap_);
+      if (plan_.cells.empty()) {
+        EndOrientation();
+      } else {
+        mid_ = CellMiddles(plan_.cells);
+        stage_ = Stage::kGreedy;
+      }
+      break;
+    }
+    case Stage::kGreedy:
+      work_ += 3 * n * n;
+      plan_.order = GreedyTour(mid_, oriented_start_);
+      round_ = 0;
+      stage_ = options_.two_opt_rounds > 0 ? Stage::kTwoOpt : Stage::kRoutes;
+      next_ = 0;
+      at_ = oriented_start_;
+      break;
+    case Stage::kTwoOpt:
+      work_ += 6 * n * n;
+      if (!TwoOptRound(mid_, oriented_start_, &plan_.order) || ++round_ >= options_.two_opt_rounds)
+        stage_ = Stage::kRoutes;
+      break;
+    case Stage::kRoutes: {
+      // Four candidate routes: their lanes, each looking its interval up in every slab.
+      const CoverageCell& c = plan_.cells[static_cast<size_t>(plan_.order[next_])];
+      const double lanes = (c.slabs.back().x1 - c.slabs.front().x0) / plan_.lane_spacing_m + 3;
+      work_ += 4 * 6 * lanes * static_cast<double>(c.slabs.size());
+      AddRoute(&plan_, plan_.order[next_], options_, &at_);
+      if (++next_ >= plan_.order.size()) {
+        EndRoutes(&plan_);
+        EndOrientation();
+      }
+      break;
+    }
+    case Stage::kIdle:
+    case Stage::kDone:
+      break;
+  }
+  return stage_ == Stage::kDone;
+}
+
+void CoveragePlanner::EndOrientation() {
+  if (!swap_ && options_.both_directions) {
+    along_y_ = std::move(plan_);
+    plan_ = {};
+    swap_ = true;
+    stage_ = Stage::kDecompose;
+    return;
+  }
+  if (along_y_ && !Shorter(plan_, *along_y_)) plan_ = std::move(*along_y_);
+  along_y_.reset();
+  stage_ = Stage::kDone;
+}
+
+CoveragePlan CoveragePlanner::Take() {
+  stage_ = Stage::kIdle;
+  return std::move(plan_);
 }
 
 void CoverageGrid::Init(const Box& room, const std::vector<Box>& rects, double r, double cell_m) {
+  Reset(room, r, cell_m);
+  for (const Box& b : rects) AddTarget(b);
+}
+
+void CoverageGrid::Reset(const Box& room, double r, double cell_m) {
   room_ = room;
   cell_m_ = cell_m;
   radius_m_ = r;
@@ -358,24 +487,25 @@ void CoverageGrid::Init(const Box& room, const std::vector<Box>& rects, double r
   ny_ = std::clamp(static_cast<int>(std::ceil(room.height() / cell_m)), 0, 4000);
   state_.assign(static_cast<size_t>(nx_) * static_cast<size_t>(ny_), 0);
   target_ = covered_ = 0;
-  for (const Box& b : rects) {
-    {
-      const Slab s{b.xmin, b.xmax, b.ymin, b.ymax};
-      const int i0 = std::max(0, static_cast<int>((s.x0 - r - room.xmin) / cell_m));
-      const int i1 = std::min(nx_ - 1, static_cast<int>((s.x1 + r - room.xmin) / cell_m));
-      const int j0 = std::max(0, static_cast<int>((s.ylo - r - room.ymin) / cell_m));
-      const int j1 = std::min(ny_ - 1, static_cast<int>((s.yhi + r - room.ymin) / cell_m));
-      for (int i = i0; i <= i1; ++i) {
-        for (int j = j0; j <= j1; ++j) {
-          const double x = room.xmin + (i + 0.5) * cell_m, y = room.ymin + (j + 0.5) * cell_m;
-          const double dx = std::max({s.x0 - x, 0.0, x - s.x1});
-          const double dy = std::max({s.ylo - y, 0.0, y - s.yhi});
-          uint8_t& st = state_[static_cast<size_t>(j) * static_cast<size_t>(nx_) + static_cast<size_t>(i)];
-          if (st == 0 && std::hypot(dx, dy) <= r) {
-            st = 1;
-            ++target_;
-          }
-        }
+}
+
+void CoverageGrid::AddTarget(const Box& b) {
+  const Box& room = room_;
+  const double cell_m = cell_m_, r = radius_m_;
+  const Slab s{b.xmin, b.xmax, b.ymin, b.ymax};
+  const int i0 = std::max(0, static_cast<int>((s.x0 - r - room.xmin) / cell_m));
+  const int i1 = std::min(nx_ - 1, static_cast<int>((s.x1 + r - room.xmin) / cell_m));
+  const int j0 = std::max(0, static_cast<int>((s.ylo - r - room.ymin) / cell_m));
+  const int j1 = std::min(ny_ - 1, static_cast<int>((s.yhi + r - room.ymin) / cell_m));
+  for (int i = i0; i <= i1; ++i) {
+    for (int j = j0; j <= j1; ++j) {
+      const double x = room.xmin + (i + 0.5) * cell_m, y = room.ymin + (j + 0.5) * cell_m;
+      const double dx = std::max({s.x0 - x, 0.0, x - s.x1});
+      const double dy = std::max({s.ylo - y, 0.0, y - s.yhi});
+      uint8_t& st = state_[static_cast<size_t>(j) * static_cast<size_t>(nx_) + static_cast<size_t>(i)];
+      if (st == 0 && std::hypot(dx, dy) <= r) {
+        st = 1;
+        ++target_;
       }
     }
   }

@@ -17,6 +17,7 @@
 #define IRSLAM_CONTROL_COVERAGE_H_
 
 #include <Eigen/Core>
+#include <optional>
 #include <vector>
 
 #include "control/room_model.h"
@@ -37,6 +38,8 @@ struct CleaningOptions {
   bool edge_pass = true;           // round each cell along its walls and furniture before its lanes
   int max_cells = 300;             // decomposition bound (more: the smallest are dropped)
   int two_opt_rounds = 30;         // improvement passes over the tour
+  int plan_work_per_period = 100000;  // planning done per control period at most (at least one
+                                      // step), in work units: a grid cell examined each, 3-5 ns here
   double sweep_speed_mps = 0.15;   // speed along a lane
   double k_cross = 4.0;            // lane following: desired heading correction, rad per metre off
   double k_heading = 2.5;          // rad/s per radian of heading error
@@ -104,6 +107,52 @@ CoveragePlan PlanCoverage(const Box& room, const std::vector<Box>& objects,
                           const std::vector<Eigen::Vector2d>& bumps, const Eigen::Vector2d& start,
                           double robot_radius_m, const CleaningOptions& options);
 
+// PlanCoverage in bounded steps (issue 15: nothing in the control tick does
+// unbounded work). Start takes the inputs; each Step does one piece: one
+// orientation's decomposition, its greedy tour, one 2-opt round, one cell's
+// sweep routes; then the other orientation; then the choice. Done, the plan
+// is exactly the one PlanCoverage makes from the same inputs (same cells,
+// tour and routes; PlanCoverage runs the same pieces in one go). A step costs
+// at most one of: a decomposition (bounded by the boxes: furniture plus
+// max_bump_obstacles), O(cells^2) for the tour (cells <= max_cells), one cell's
+// four candidate routes.
+class CoveragePlanner {
+ public:
+  void Start(const Box& room, const std::vector<Box>& objects, const std::vector<Eigen::Vector2d>& bumps,
+             const Eigen::Vector2d& start, double robot_radius_m, const CleaningOptions& options);
+  // One piece of the work; true when the plan is complete (and from then on).
+  bool Step();
+  bool done() const { return stage_ == Stage::kDone; }
+  int steps() const { return steps_; }
+  // The work of the steps so far, in work units (CleaningOptions::plan_work_per_period):
+  // an estimate of the distances and interval look-ups done, three units each.
+  double work() const { return work_; }
+  // The plan, once done (moved out: the planner is idle again).
+  CoveragePlan Take();
+
+ private:
+  enum class Stage { kIdle, kDecompose, kGreedy, kTwoOpt, kRoutes, kDone };
+  void EndOrientation();
+
+  Box room_;
+  std::vector<Box> objects_;
+  std::vector<Eigen::Vector2d> bumps_;
+  Eigen::Vector2d start_ = Eigen::Vector2d::Zero();
+  double radius_m_ = 0;
+  CleaningOptions options_;
+  Stage stage_ = Stage::kIdle;
+  bool swap_ = false;               // the orientation being planned (false: lanes along y)
+  CoveragePlan plan_;               // of this orientation
+  std::optional<CoveragePlan> along_y_;  // the first orientation's, when both are planned
+  Eigen::Vector2d oriented_start_ = Eigen::Vector2d::Zero();
+  std::vector<Eigen::Vector2d> mid_;  // the cells' middles (tour)
+  int round_ = 0;                   // 2-opt rounds done
+  size_t next_ = 0;                 // the next cell of the tour to route
+  Eigen::Vector2d at_ = Eigen::Vector2d::Zero();  // where the last route ended
+  int steps_ = 0;
+  double work_ = 0;
+};
+
 // Floor covered so far: a grid over the room; the target is the floor the body
 // disc can reach from the plan's free space, marks come from the body's poses.
 class CoverageGrid {
@@ -111,6 +160,9 @@ class CoverageGrid {
   CoverageGrid() = default;
   // Cells of the floor within body_radius_m of the plan's free space are the target.
   void Init(const Box& room, const std::vector<Box>& free_rects, double body_radius_m, double cell_m);
+  // Init in pieces (the same grid): Reset, then AddTarget for each free rectangle.
+  void Reset(const Box& room, double body_radius_m, double cell_m);
+  void AddTarget(const Box& free_rect);
   // The body disc at p (radius body_radius_m) cleans the floor under it.
   void Mark(const Eigen::Vector2d& p);
   double total_m2() const { return target_ * cell_m_ * cell_m_; }

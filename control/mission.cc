@@ -581,21 +581,32 @@ WheelCommand Mission::StepContour(double t, double dt, const slam::Slam& slam,
 WheelCommand Mission::Finish(double t, const slam::Slam& slam, const EnvironmentModel& m,
                              std::string reason) {
   if (!clean_mode_) return To(MissionState::kDone, t, std::move(reason));
-  // Plan the coverage once, bounded by the room's size, and clean.
-  clean_.Begin(t, slam, m, bumps_);
-  clean_started_ = t;
-  // A cleaning stopped before (not finished) goes on with the cells it left.
+  // Plan the coverage once, bounded by the room's size, a piece per period
+  // (StepClean), and clean. A cleaning stopped before (not finished) goes on
+  // with the cells it left.
   const bool resume = resume_cleaning_ && resume_cleaning_->state != CleanState::kDone &&
                       resume_cleaning_->state != CleanState::kNone;
-  const int done = resume ? clean_.Resume(*resume_cleaning_) : 0;
+  clean_.Begin(t, slam, m, bumps_, resume ? resume_cleaning_ : std::nullopt);
+  clean_started_ = t;
   resume_cleaning_.reset();
+  // This period's share (a room's whole plan, usually): cleaning starts next period.
+  if (clean_.Plan(t)) return To(MissionState::kClean, t, CleaningReason());
+  return To(MissionState::kClean, t, "planning the cleaning");
+}
+
+std::string Mission::CleaningReason() const {
   std::string what = "cleaning " + std::to_string(clean_.plan().cells.size()) + " cells";
-  if (done > 0) what += " (resumed: " + std::to_string(done) + " done before)";
-  return To(MissionState::kClean, t, what);
+  if (clean_.resumed_cells() > 0) what += " (resumed: " + std::to_string(clean_.resumed_cells()) + " done before)";
+  return what;
 }
 
 WheelCommand Mission::StepClean(double t, double dt, const slam::Slam& slam,
                                 const RangeScan& raw_scan, uint8_t bumpers) {
+  if (clean_.planning()) {
+    // Holding still until the plan is complete.
+    if (clean_.Plan(t)) reason_ = CleaningReason();
+    return Halt();
+  }
   const Clean::Result r = clean_.Step(t, slam, raw_scan, bumpers, bumps_, follower_);
   if (r.status == Clean::Status::kCleaning) return ToWheels(r.twist, dt);
   clean_.SetState(CleanState::kReturning, t, slam.distance_m());

@@ -212,6 +212,8 @@ class Mission {
   // Modelled and explored: done, or in mode clean, plan the cleaning and start it.
   WheelCommand Finish(double t, const slam::Slam& slam, const EnvironmentModel& m,
                       std::string reason);
+  // The reason while cleaning: the cells planned (and resumed).
+  std::string CleaningReason() const;
   WheelCommand StepClean(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
                          uint8_t bumpers);
   WheelCommand StepReturnHome(double t, double dt, const slam::Slam& slam, const RangeScan& scan,

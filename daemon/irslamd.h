@@ -108,7 +108,11 @@ class Daemon : public ApiServer::Dispatcher {
     return RobotTimeFromLogNs(last_handed_us_ * 1000, options_.time_scale);
   }
   static int64_t Ns(WallTime t);
-  nlohmann::json LiveMap() const { return ToJson(core_->Map()); }
+  // The live core's map: a typed snapshot now, its JSON built when called (on
+  // the map writer's thread for a save: issue 15).
+  MapEncoder LiveMap() const {
+    return [m = std::make_shared<const robot::MapSnapshot>(core_->Map())] { return ToJson(*m); };
+  }
   RpcMethodTable MakeMethods();  // daemon_rpc.cc
   nlohmann::json Start(const rpc::Request& req);
   // stop: the wheels at once; the reply when the map's save has an outcome.

@@ -31,15 +31,16 @@ MapService::MapService(std::string state_dir, WallClock clock, double min_interv
     : store_(std::move(state_dir)), path_(store_.path()), clock_(std::move(clock)),
       min_interval_s_(min_interval_s) {
   if (io != nullptr) {
-    writer_ = std::make_unique<MapWriter>(*io, store_.dir(), [this](MapWriter::Outcome o) {
-      const SaveResult r = Apply(o);
-      if (written_) written_(r);
-    });
+    writer_ = std::make_unique<MapWriter>(*io, store_.dir(), [this](MapWriter::Outcome o) { OnOutcome(o); });
   }
 }
 
 void MapService::Load() {
-  stored_ = store_.Load(&error_);
+  if (auto loaded = store_.Load(&error_)) {
+    stored_ = std::make_shared<const StoredMap>(std::move(*loaded));
+  } else {
+    stored_.reset();
+  }
   if (!error_.empty()) std::fprintf(stderr, "<3>irslamd: %s\n", error_.c_str());
   if (stored_) {
     std::fprintf(stderr, "<6>irslamd: map loaded from %s (save %llu, %s, %zu lines)\n", path_.c_str(),
@@ -56,23 +57,23 @@ std::string MapService::SetAside(const std::string& why) {
   return "map: " + path_ + ": " + why + "; kept aside as " + aside + ", not used";
 }
 
-void MapService::OnCoreReplaced(const nlohmann::json& old_map) {
+void MapService::OnCoreReplaced(MapEncoder old_map) {
   if (!live_ran_) return;  // the old core made no map: nothing to keep
   live_ran_ = false;
-  held_ = old_map;
-  Save("reload", [] { return nlohmann::json(); }, /*final=*/true);
+  held_ = std::move(old_map);
+  Save("reload", [] { return MapEncoder([] { return nlohmann::json(); }); }, /*final=*/true);
 }
 
 nlohmann::json MapService::Serve(const MapSource& live) const {
-  if (live_ran_) return live();
-  if (held_) return *held_;
+  if (live_ran_) return live()();
+  if (held_) return held_();
   if (stored_) {
     // Before any mission of this run: the map saved by the previous one.
     nlohmann::json m = stored_->map;
     m["saved"] = {{"seq", stored_->seq}, {"reason", stored_->reason}, {"path", path_}};
     return m;
   }
-  return live();
+  return live()();
 }
 
 SaveResult MapService::Save(const char* reason, const MapSource& live, bool final) {
@@ -80,6 +81,7 @@ SaveResult MapService::Save(const char* reason, const MapSource& live, bool fina
 }
 
 SaveResult MapService::Flush(const char* reason, const MapSource& live) {
+  next_.reset();  // the final save below covers it
   if (writer_) {
     if (auto o = writer_->Drain()) {
       const SaveResult r = Apply(*o);
@@ -91,26 +93,30 @@ SaveResult MapService::Flush(const char* reason, const MapSource& live) {
 
 SaveResult MapService::SaveImpl(const char* reason, const MapSource& live, bool final, bool sync) {
   if (!live_ran_ && !held_) return last_result_ = SaveResult::kNothing;  // nothing new
-  nlohmann::json map = live_ran_ ? live() : *held_;
-  if (in_flight_) {
-    // This very map is being written: its outcome is this save's.
-    if (map == in_flight_->map) return SaveResult::kQueued;
-    // A newer one: written when the writer is free (Poll).
-    ++deferred_;
-    pending_reason_ = reason;
-    return last_result_ = SaveResult::kDeferred;
+  // The snapshot only (no encoding here: that is the writer's).
+  Request request{reason, live_ran_ ? live() : held_, final};
+  if (!sync && writer_->busy()) {
+    // Goes to the writer when the job in flight is done; its outcome is this save's.
+    next_ = std::move(request);
+    return SaveResult::kQueued;
   }
-  if (stored_ && map == stored_->map) {
-    ++unchanged_;
-    pending_reason_.reset();
-    return last_result_ = SaveResult::kUnchanged;
+  return Submit(std::move(request), sync);
+}
+
+SaveResult MapService::Submit(Request request, bool sync) {
+  MapWriter::Job job;
+  job.seq = (stored_ ? stored_->seq : 0) + 1;
+  job.reason = std::move(request.reason);
+  job.encode = std::move(request.map);
+  job.last = stored_;
+  submitted_s_ = Now();
+  job.may_write = request.final || submitted_s_ - last_write_s_ >= min_interval_s_;
+  if (!sync) {
+    // Handed over immutable; the control loop goes on at once.
+    writer_->Submit(std::move(job));
+    return last_result_ = SaveResult::kQueued;
   }
-  if (!final && Now() - last_write_s_ < min_interval_s_) {
-    ++deferred_;
-    pending_reason_ = reason;
-    return last_result_ = SaveResult::kDeferred;
-  }
-  return Write(reason, std::move(map), sync);
+  return Apply(MapWriter::Process(store_, job));
 }
 
 void MapService::Poll(const MapSource& live) {
@@ -120,36 +126,43 @@ void MapService::Poll(const MapSource& live) {
   Save(reason.c_str(), live);
 }
 
-SaveResult MapService::Write(const char* reason, nlohmann::json map, bool sync) {
-  pending_reason_.reset();
-  auto m = std::make_shared<StoredMap>();
-  m->seq = (stored_ ? stored_->seq : 0) + 1;
-  m->reason = reason;
-  m->map = std::move(map);
-  const WallTime t0 = clock_();
-  last_write_s_ = SecondsBetween(WallTime{}, t0);
-  if (!sync && writer_) {
-    // Handed over immutable; the control loop goes on at once.
-    in_flight_ = std::move(m);
-    writer_->Submit(in_flight_);
-    return last_result_ = SaveResult::kQueued;
+void MapService::OnOutcome(const MapWriter::Outcome& o) {
+  const SaveResult r = Apply(o);
+  if (next_) {
+    // A newer save was asked for meanwhile: its outcome answers (written_) instead.
+    Request request = std::move(*next_);
+    next_.reset();
+    Submit(std::move(request), /*sync=*/false);
+    return;
   }
-  MapWriter::Outcome o;
-  o.ok = store_.Save(*m, &o.error);
-  o.ms = SecondsBetween(t0, clock_()) * 1e3;
-  o.map = std::move(m);
-  return Apply(o);
+  if (written_) written_(r);
 }
 
 SaveResult MapService::Apply(const MapWriter::Outcome& o) {
-  in_flight_.reset();
+  using R = MapWriter::Result;
   last_save_ms_ = o.ms;
-  if (o.ok) {
-    ++saves_;
-    stored_ = *o.map;
-    error_.clear();
-    return last_result_ = SaveResult::kSaved;
+  switch (o.result) {
+    case R::kUnchanged:
+      ++unchanged_;
+      pending_reason_.reset();
+      return last_result_ = SaveResult::kUnchanged;
+    case R::kNotWritten:
+      // Changed, but the last write was too recent: Poll does it when its time comes.
+      ++deferred_;
+      pending_reason_ = o.map->reason;
+      return last_result_ = SaveResult::kDeferred;
+    case R::kSaved:
+      last_write_s_ = submitted_s_;
+      pending_reason_.reset();
+      ++saves_;
+      stored_ = o.map;
+      error_.clear();
+      return last_result_ = SaveResult::kSaved;
+    case R::kFailed:
+      break;
   }
+  last_write_s_ = submitted_s_;
+  pending_reason_.reset();
   ++save_errors_;
   error_ = o.error;
   std::fprintf(stderr, "<3>irslamd: %s\n", o.error.c_str());
@@ -159,13 +172,13 @@ SaveResult MapService::Apply(const MapWriter::Outcome& o) {
 nlohmann::json MapService::StatusJson() const {
   return {{"path", path_},
           {"seq", stored_ ? stored_->seq : 0},
-          {"saved_map", stored_.has_value()},
+          {"saved_map", stored_ != nullptr},
           {"saves", saves_},
           {"save_errors", save_errors_},
           {"unchanged", unchanged_},
           {"deferred", deferred_},
-          {"pending", pending_reason_.has_value()},
-          {"writing", in_flight_ != nullptr},
+          {"pending", save_pending()},
+          {"writing", writing()},
           {"last_result", ToString(last_result_)},
           {"last_save_ms", last_save_ms_},
           {"error", error_}};

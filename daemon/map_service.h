@@ -16,14 +16,16 @@
 //     a save asked for sooner is "deferred" and done by Poll() when its time comes.
 // A save that fails is reported (Save's result, status.map_store.error, the log).
 //
-// With an io_context (the daemon), the file is written by a MapWriter thread
-// (daemon/map_writer.h): Save builds the snapshot, hands it over and returns
-// kQueued at once; the outcome arrives later on the io_context, updates the
-// status and is passed to the written() callback (the daemon answers a `stop`
-// waiting for it). A save asked for while one is in flight waits (pending) and
-// Poll() submits it when the writer is free. Without one (tests, tools) Save
-// writes synchronously, as before. The final save at shutdown (Flush) always
-// writes synchronously, after the write in flight.
+// With an io_context (the daemon), the map is encoded, compared and written by
+// a MapWriter thread (daemon/map_writer.h): Save takes the typed snapshot (the
+// source's MapEncoder), hands it over and returns kQueued at once; the outcome
+// (kSaved, kUnchanged, kDeferred: changed but too soon, kFailed) arrives later on
+// the io_context, updates the status and is passed to the written() callback
+// (the daemon answers a `stop` waiting for it). A save asked for while one is in
+// flight waits (the newest only) and goes to the writer when that one's outcome
+// is in; the callback then waits for its outcome too. Without an io_context
+// (tests, tools) Save does the same synchronously. The final save at shutdown
+// (Flush) always encodes and writes synchronously, after the job in flight.
 #ifndef IRSLAM_DAEMON_MAP_SERVICE_H_
 #define IRSLAM_DAEMON_MAP_SERVICE_H_
 
@@ -40,16 +42,18 @@
 
 namespace irslam {
 
-// kQueued: handed to the writer thread; the outcome (kSaved or kFailed) comes later.
+// kQueued: handed to the writer thread; the outcome (kSaved, kUnchanged, kDeferred
+// or kFailed) comes later.
 enum class SaveResult { kSaved, kUnchanged, kNothing, kDeferred, kFailed, kQueued };
 const char* ToString(SaveResult r);
 
 class MapService {
  public:
-  using MapSource = std::function<nlohmann::json()>;  // the live core's map, built on demand
+  // The live core's map: a snapshot taken now (control thread), encoded later.
+  using MapSource = std::function<MapEncoder()>;
   static constexpr double kDefaultMinIntervalS = 5.0;
 
-  // The outcome of a queued write (kSaved or kFailed), on the io_context.
+  // The outcome of a queued save (kSaved, kUnchanged, kDeferred or kFailed), on the io_context.
   using Written = std::function<void(SaveResult)>;
 
   // io: write on a MapWriter thread and deliver outcomes there; nullptr: write synchronously.
@@ -69,7 +73,7 @@ class MapService {
   // The core is about to be replaced (a reload): its map, if a mission made one, is
   // saved now if it was not yet (ignoring the rate limit) and served until a
   // mission starts on the new core.
-  void OnCoreReplaced(const nlohmann::json& old_map);
+  void OnCoreReplaced(MapEncoder old_map);
 
   nlohmann::json Serve(const MapSource& live) const;
   // final: not rate-limited (reload, shutdown).
@@ -80,33 +84,41 @@ class MapService {
   void Poll(const MapSource& live);
 
   bool has_live_map() const { return live_ran_; }
-  bool save_pending() const { return pending_reason_.has_value(); }
-  bool writing() const { return in_flight_ != nullptr; }
+  bool save_pending() const { return pending_reason_.has_value() || next_.has_value(); }
+  bool writing() const { return writer_ && writer_->busy(); }
   const std::string& error() const { return error_; }
-  const std::optional<StoredMap>& stored() const { return stored_; }
+  const std::shared_ptr<const StoredMap>& stored() const { return stored_; }
   const std::string& path() const { return path_; }
   nlohmann::json StatusJson() const;
 
  private:
+  struct Request {
+    std::string reason;
+    MapEncoder map;
+    bool final = false;
+  };
   SaveResult SaveImpl(const char* reason, const MapSource& live, bool final, bool sync);
-  SaveResult Write(const char* reason, nlohmann::json map, bool sync);
-  SaveResult Apply(const MapWriter::Outcome& outcome);  // a finished write's outcome
+  // Hands the request to the writer (or does it here: sync).
+  SaveResult Submit(Request request, bool sync);
+  SaveResult Apply(const MapWriter::Outcome& outcome);  // a finished job's outcome
+  void OnOutcome(const MapWriter::Outcome& outcome);     // from the writer, on the io_context
   double Now() const { return SecondsBetween(WallTime{}, clock_()); }
 
   MapStore store_;
   std::string path_;
   WallClock clock_;
   double min_interval_s_;
-  std::optional<StoredMap> stored_;   // the last map saved or loaded
-  std::optional<nlohmann::json> held_;  // kept from a replaced core
+  std::shared_ptr<const StoredMap> stored_;  // the last map saved or loaded (the writer reads it too)
+  MapEncoder held_;                    // kept from a replaced core
   bool live_ran_ = false;              // a mission ran on the live core
-  std::optional<std::string> pending_reason_;  // a deferred save
+  std::optional<std::string> pending_reason_;  // a deferred save (too soon): Poll does it
+  std::optional<Request> next_;        // asked for while a job is in flight
   double last_write_s_ = -1e18;
+  double submitted_s_ = 0;             // when the job in flight (or the last) was handed over
   uint64_t saves_ = 0, save_errors_ = 0, unchanged_ = 0, deferred_ = 0;
   double last_save_ms_ = 0;
   SaveResult last_result_ = SaveResult::kNothing;
   std::string error_;
-  std::shared_ptr<const StoredMap> in_flight_;  // handed to the writer, outcome not yet in
   Written written_;
   std::unique_ptr<MapWriter> writer_;  // last: its thread stops before the rest goes
 };

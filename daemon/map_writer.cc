@@ -18,12 +18,32 @@ MapWriter::~MapWriter() {
   thread_.join();
 }
 
-void MapWriter::Submit(std::shared_ptr<const StoredMap> map) {
+MapWriter::Outcome MapWriter::Process(MapStore& store, const Job& job) {
+  // The shell's own clock: how long it took (reported, never decides anything).
+  const auto t0 = std::chrono::steady_clock::now();
+  auto m = std::make_shared<StoredMap>();
+  m->seq = job.seq;
+  m->reason = job.reason;
+  m->map = job.encode();
+  Outcome o;
+  if (job.last && m->map == job.last->map) {
+    o.result = Result::kUnchanged;
+  } else if (!job.may_write) {
+    o.result = Result::kNotWritten;
+  } else {
+    o.result = store.Save(*m, &o.error) ? Result::kSaved : Result::kFailed;
+  }
+  o.map = std::move(m);
+  o.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return o;
+}
+
+void MapWriter::Submit(Job job) {
   busy_ = true;
   work_.emplace(io_.get_executor());
   {
     std::lock_guard<std::mutex> lock(mu_);
-    job_ = Job{std::move(map), ++next_id_};
+    job_.emplace(++next_id_, std::move(job));
   }
   cv_.notify_all();
 }
@@ -50,28 +70,26 @@ void MapWriter::Deliver(uint64_t id, Outcome outcome) {
 
 void MapWriter::Loop() {
   for (;;) {
+    uint64_t id = 0;
     Job job;
     {
       std::unique_lock<std::mutex> lock(mu_);
       cv_.wait(lock, [this] { return job_.has_value() || quit_; });
       if (!job_) return;  // quit, nothing left to write
-      job = std::move(*job_);
+      id = job_->first;
+      job = std::move(job_->second);
       job_.reset();
       writing_ = true;
     }
-    // The shell's own clock: how long the disk took (reported, never decides anything).
-    const auto t0 = std::chrono::steady_clock::now();
-    Outcome outcome;
-    outcome.map = job.map;
-    outcome.ok = store_.Save(*job.map, &outcome.error);
-    outcome.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    Outcome outcome = Process(store_, job);
+    job = {};  // the snapshot goes here, not on the control thread
     {
       std::lock_guard<std::mutex> lock(mu_);
       writing_ = false;
-      result_ = {job.id, outcome};
+      result_ = {id, outcome};
     }
     cv_.notify_all();
-    boost::asio::post(io_, [this, alive = std::weak_ptr<int>(alive_), id = job.id, o = std::move(outcome)]() mutable {
+    boost::asio::post(io_, [this, alive = std::weak_ptr<int>(alive_), id, o = std::move(outcome)]() mutable {
       if (alive.lock()) Deliver(id, std::move(o));
     });
   }

@@ -1,14 +1,17 @@
-// Writes map files off the control thread (issue 15): the control loop hands
-// over an immutable snapshot and never waits for the disk; one writer thread
-// encodes and saves it (daemon/map_store.h: temporary file, fsync, rename,
-// fsync of the directory) and posts the outcome back onto the control loop's
+// Saves maps off the control thread (issue 15): the control loop hands over a
+// job - an immutable snapshot of the map, not yet encoded - and never waits for
+// the encoding, the comparison or the disk; one writer thread encodes it as
+// JSON, compares it with the last map saved (an identical one is not written)
+// and saves it (daemon/map_store.h: temporary file, fsync, rename, fsync of
+// the directory), and posts the outcome back onto the control loop's
 // io_context, where the completion handler runs.
 //
-// Hand-over, race-free by construction: the snapshot is a
-// shared_ptr<const StoredMap> (both threads only read it); the one job slot is
-// guarded by a mutex; the outcome travels back by value through
-// boost::asio::post. Nothing else is shared. One write at a time: Submit is
-// only called when !busy() (the map service keeps a newer map pending).
+// Hand-over, race-free by construction: the job's snapshot is captured by its
+// encoder (both threads only read it, and only the writer encodes it); the
+// last map saved is a shared_ptr<const StoredMap> (read-only on both threads);
+// the one job slot is guarded by a mutex; the outcome travels back by value
+// through boost::asio::post. Nothing else is shared. One job at a time: Submit
+// is only called when !busy() (the map service keeps a newer one waiting).
 #ifndef IRSLAM_DAEMON_MAP_WRITER_H_
 #define IRSLAM_DAEMON_MAP_WRITER_H_
 
@@ -17,6 +20,7 @@
 #include <condition_variable>
 #include <functional>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -26,15 +30,30 @@
 
 namespace irslam {
 
+// A map to save, taken on the control thread as an immutable snapshot: calling
+// it builds the map's JSON (contracts §4). Callable from any thread.
+using MapEncoder = std::function<nlohmann::json()>;
+
 class MapWriter {
  public:
+  struct Job {
+    MapEncoder encode;
+    uint64_t seq = 0;     // the file's number if it is written
+    std::string reason;
+    std::shared_ptr<const StoredMap> last;  // the last map saved (or loaded): an identical one is not written
+    bool may_write = true;  // false: a changed map is not written (too soon), only reported
+  };
+  enum class Result { kSaved, kUnchanged, kNotWritten, kFailed };
   struct Outcome {
-    std::shared_ptr<const StoredMap> map;  // what was written (or tried)
-    bool ok = false;
-    std::string error;  // when !ok
-    double ms = 0;      // encoding + writing, on the writer thread
+    std::shared_ptr<const StoredMap> map;  // what was encoded (written, or tried)
+    Result result = Result::kFailed;
+    std::string error;  // when kFailed
+    double ms = 0;      // encoding, comparing and writing
   };
   using Done = std::function<void(Outcome)>;
+
+  // The job done on the calling thread: encode, compare, write (if changed and may_write).
+  static Outcome Process(MapStore& store, const Job& job);
 
   // done runs on io (the control thread) once per submitted write.
   MapWriter(boost::asio::io_context& io, std::string dir, Done done);
@@ -44,7 +63,7 @@ class MapWriter {
   MapWriter& operator=(const MapWriter&) = delete;
 
   // Control thread. Returns at once; requires !busy().
-  void Submit(std::shared_ptr<const StoredMap> map);
+  void Submit(Job job);
   // Control thread: a write was submitted and its outcome not yet delivered.
   bool busy() const { return busy_; }
   // Control thread, at shutdown only: blocks until the write in flight is done
@@ -54,10 +73,6 @@ class MapWriter {
 
  private:
   using WorkGuard = boost::asio::executor_work_guard<boost::asio::io_context::executor_type>;
-  struct Job {
-    std::shared_ptr<const StoredMap> map;
-    uint64_t id = 0;
-  };
   void Loop();
   void Deliver(uint64_t id, Outcome outcome);  // control thread
 
@@ -71,7 +86,7 @@ class MapWriter {
 
   std::mutex mu_;
   std::condition_variable cv_;
-  std::optional<Job> job_;               // guarded by mu_: submitted, not yet taken
+  std::optional<std::pair<uint64_t, Job>> job_;  // guarded by mu_: submitted (id, job), not yet taken
   std::optional<std::pair<uint64_t, Outcome>> result_;  // guarded by mu_: the last outcome
   bool writing_ = false;                 // guarded by mu_
   bool quit_ = false;                    // guarded by mu_

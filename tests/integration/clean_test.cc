@@ -95,5 +95,56 @@ TEST(CleanModeTest, TheMapCarriesTheCellsWithDoneFlags) {
   }
 }
 
+// Issue 15: the coverage plan made a bounded piece per period (a tiny share
+// per period here, so it takes many) is the same plan as the one made in the
+// period the cleaning began; the robot holds still meanwhile.
+TEST(CleanModeTest, APlanSpreadOverManyPeriodsIsTheSamePlan) {
+  const sim::World world = testing::LoadTestWorld("fig14");
+  robot::CoreOptions o = robot::DefaultCoreOptions();
+  o.mission.mode = "clean";
+  struct Planned {
+    int planning_periods = 0;
+    double still_m = 0;  // driven while planning (true)
+    std::optional<control::CleaningProgress> cleaning;
+  };
+  const auto run = [&](const robot::CoreOptions& options) {
+    Planned p;
+    sim::RunSetup setup;
+    setup.stop_when = [&](const sim::InProcessRun& r) {
+      const auto c = r.core->Status(r.t).cleaning;
+      return c && c->cells_total > 0 && r.core->state() == control::MissionState::kClean &&
+             r.core->Status(r.t).mission.reason.rfind("cleaning ", 0) == 0;
+    };
+    double at = -1;
+    const sim::InProcessRun r = sim::RunInProcess(
+        world, options, 1, 2000,
+        [&](const sim::InProcessRun& now) {
+          if (now.core->Status(now.t).mission.reason != "planning the cleaning") return;
+          ++p.planning_periods;
+          const double d = now.core->slam().distance_m();
+          if (at < 0) at = d;
+          p.still_m = std::max(p.still_m, d - at);
+        },
+        nullptr, nullptr, setup);
+    p.cleaning = r.core->Map().cleaning;
+    return p;
+  };
+  const Planned whole = run(o);
+  o.mission.cleaning.plan_work_per_period = 1000;
+  const Planned spread = run(o);
+  EXPECT_EQ(whole.planning_periods, 0);  // the paper's room: planned in the period it began
+  EXPECT_GE(spread.planning_periods, 5);
+  EXPECT_LT(spread.still_m, 0.01);
+  ASSERT_TRUE(whole.cleaning && spread.cleaning);
+  ASSERT_EQ(whole.cleaning->cells.size(), spread.cleaning->cells.size());
+  EXPECT_GE(whole.cleaning->cells.size(), 4u);
+  for (size_t i = 0; i < whole.cleaning->cells.size(); ++i) {
+    EXPECT_EQ(whole.cleaning->cells[i].id, spread.cleaning->cells[i].id);
+    EXPECT_TRUE(whole.cleaning->cells[i].polygon == spread.cleaning->cells[i].polygon) << i;
+    EXPECT_TRUE(whole.cleaning->cells[i].route == spread.cleaning->cells[i].route) << i;
+  }
+  EXPECT_EQ(whole.cleaning->total_m2, spread.cleaning->total_m2);
+}
+
 }  // namespace
 }  // namespace irslam

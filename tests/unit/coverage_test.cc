@@ -229,5 +229,110 @@ TEST(CoverageTest, LanesGoAlongTheLongerSideWhenThatIsShorterInAll) {
   EXPECT_LT(p.route_length_m + p.transit_length_m, q.route_length_m + q.transit_length_m);
 }
 
+// Issue 15: the planner in bounded steps makes exactly PlanCoverage's plan (the
+// paper's rooms and an 8 x 6 m one, with contacts, under the options that change
+// the plan's shape), in a bounded number of steps.
+struct PlanCase {
+  const char* name;
+  Box room;
+  std::vector<Box> objects;
+  std::vector<Eigen::Vector2d> bumps;
+  Eigen::Vector2d start;
+};
+
+std::vector<PlanCase> PlanCases() {
+  return {
+      {"fig14", {0, 0, 4, 5.5}, {{0, 2, 0.6, 3.2}, {1.4, 1.2, 2.2, 1.8}, {2.3, 3.6, 3, 4.4}}, {}, {2, 0.8}},
+      {"fig19",
+       {0, 0, 4, 4},
+       {{0.8, 0.9, 1.4, 1.4}, {2.6, 0.9, 3.2, 1.5}, {0.9, 2.6, 1.5, 3.1}, {2.5, 2.6, 3.1, 3.2}},
+       {{2.0, 3.5}},
+       {2, 2}},
+      {"fig20",
+       {0, 0, 4, 4},
+       {{0, 1.4, 0.5, 2.4}, {1.6, 3.5, 2.6, 4}, {1.2, 0.9, 1.8, 1.5}, {2.6, 1.8, 3.1, 2.6}},
+       {},
+       {3.4, 0.6}},
+      {"large_room",
+       {0, 0, 8, 6},
+       {{0, 2.2, 0.6, 3.6}, {2, 1.4, 3.2, 2.2}, {5, 3.4, 6, 4.4}, {7.2, 0, 8, 1.2}, {3.2, 5.4, 4.6, 6}},
+       {{4.0, 3.0}, {6.5, 2.0}, {1.0, 5.0}},
+       {4, 0.8}},
+  };
+}
+
+void ExpectSamePlan(const CoveragePlan& a, const CoveragePlan& b) {
+  EXPECT_EQ(a.swapped, b.swapped);
+  EXPECT_EQ(a.order, b.order);
+  ASSERT_EQ(a.cells.size(), b.cells.size());
+  for (size_t i = 0; i < a.cells.size(); ++i) {
+    EXPECT_EQ(a.cells[i].id, b.cells[i].id);
+    EXPECT_EQ(a.cells[i].neighbours, b.cells[i].neighbours);
+    ASSERT_EQ(a.cells[i].slabs.size(), b.cells[i].slabs.size());
+    for (size_t k = 0; k < a.cells[i].slabs.size(); ++k) {
+      const Slab &s = a.cells[i].slabs[k], &t = b.cells[i].slabs[k];
+      EXPECT_TRUE(s.x0 == t.x0 && s.x1 == t.x1 && s.ylo == t.ylo && s.yhi == t.yhi) << "cell " << i << " slab " << k;
+    }
+  }
+  ASSERT_EQ(a.routes.size(), b.routes.size());
+  for (size_t i = 0; i < a.routes.size(); ++i) EXPECT_TRUE(a.routes[i] == b.routes[i]) << "route " << i;
+  EXPECT_EQ(a.route_length_m, b.route_length_m);
+  EXPECT_EQ(a.transit_length_m, b.transit_length_m);
+}
+
+TEST(CoveragePlannerTest, StepByStepMakesExactlyTheOneShotPlan) {
+  std::vector<CleaningOptions> variants(4, CleaningOptions{});
+  variants[1].both_directions = false;
+  variants[2].edge_pass = false;
+  variants[2].two_opt_rounds = 0;
+  variants[3].two_opt_rounds = 1;
+  variants[3].cleaning_width_m = 0.25;
+  for (const PlanCase& c : PlanCases()) {
+    for (size_t v = 0; v < variants.size(); ++v) {
+      SCOPED_TRACE(std::string(c.name) + " options " + std::to_string(v));
+      const CleaningOptions& o = variants[v];
+      const CoveragePlan one = PlanCoverage(c.room, c.objects, c.bumps, c.start, kRadius, o);
+      CoveragePlanner planner;
+      planner.Start(c.room, c.objects, c.bumps, c.start, kRadius, o);
+      int steps = 0;
+      while (!planner.Step()) ASSERT_LT(++steps, 10000);
+      EXPECT_TRUE(planner.Step());  // done stays done
+      // Per orientation: decomposition, greedy tour, the 2-opt rounds, a step per cell.
+      const int orientations = o.both_directions ? 2 : 1;
+      EXPECT_LE(planner.steps(), orientations * (2 + o.two_opt_rounds) + 2 * static_cast<int>(one.cells.size()) + 2);
+      EXPECT_GT(planner.steps(), static_cast<int>(one.cells.size()));
+      ExpectSamePlan(planner.Take(), one);
+      EXPECT_GE(one.cells.size(), 1u);
+    }
+  }
+}
+
+TEST(CoveragePlannerTest, ARoomWithNoFreeFloorIsAnEmptyPlanInAFewSteps) {
+  CoveragePlanner planner;
+  planner.Start({0, 0, 0.3, 0.3}, {}, {}, {0.15, 0.15}, kRadius, CleaningOptions{});
+  int steps = 0;
+  while (!planner.Step()) ++steps;
+  EXPECT_LE(planner.steps(), 2);
+  const CoveragePlan p = planner.Take();
+  EXPECT_TRUE(p.cells.empty());
+  EXPECT_TRUE(p.routes.empty());
+}
+
+TEST(CoverageTest, TheGridInPiecesIsTheGridInOneGo) {
+  const PlanCase c = PlanCases()[3];
+  const CoveragePlan p = PlanCoverage(c.room, c.objects, c.bumps, c.start, kRadius, CleaningOptions{});
+  CoverageGrid whole, pieces;
+  whole.Init(c.room, p.FreeRects(), 0.17, 0.05);
+  pieces.Reset(c.room, 0.17, 0.05);
+  for (const Box& b : p.FreeRects()) pieces.AddTarget(b);
+  EXPECT_GT(whole.total_m2(), 30.0);
+  EXPECT_EQ(whole.total_m2(), pieces.total_m2());
+  for (double x = 0.5; x < 7.5; x += 0.02) {
+    whole.Mark({x, 0.8});
+    pieces.Mark({x, 0.8});
+  }
+  EXPECT_EQ(whole.covered_m2(), pieces.covered_m2());
+}
+
 }  // namespace
 }  // namespace irslam::control

@@ -2,8 +2,10 @@
 // and when, under a fake clock.
 #include <gtest/gtest.h>
 
+#include <boost/asio/io_context.hpp>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "daemon/map_service.h"
 #include "tests/testing/process.h"
@@ -43,7 +45,7 @@ class MapServiceTest : public ::testing::Test {
   WallTime now_ = WallTime(std::chrono::hours(10));
   nlohmann::json live_ = MapWithLines(0);
   MapService::MapSource live() {
-    return [this] { return live_; };
+    return [this] { return MapEncoder([m = live_] { return m; }); };
   }
 };
 
@@ -76,7 +78,7 @@ TEST_F(MapServiceTest, AReplacedCoresFinishedMapIsKeptServedAndNeverOverwrittenB
   ASSERT_EQ(maps->Save("model", live()), SaveResult::kSaved);
   const nlohmann::json finished = live_;
   Advance(60);
-  maps->OnCoreReplaced(finished);
+  maps->OnCoreReplaced([finished] { return finished; });
   live_ = MapWithLines(0);  // the new core knows nothing
   EXPECT_EQ(maps->Serve(live())["lines"].size(), 5u);
   EXPECT_EQ(maps->Save("stop", live()), SaveResult::kUnchanged);
@@ -99,7 +101,7 @@ TEST_F(MapServiceTest, AnUnsavedMapOfAReplacedCoreIsSavedThen) {
   live_ = MapWithLines(2);
   ASSERT_EQ(maps->Save("stop", live()), SaveResult::kSaved);
   live_ = MapWithLines(4);  // the mission went on after that save
-  maps->OnCoreReplaced(live_);
+  maps->OnCoreReplaced([m = live_] { return m; });
   EXPECT_EQ(maps->StatusJson()["last_result"], "saved");
   EXPECT_EQ(OnDisk()->map["lines"].size(), 4u);
   EXPECT_EQ(OnDisk()->reason, "reload");
@@ -153,6 +155,85 @@ TEST_F(MapServiceTest, AFailedSaveIsReportedAndTheNextOneTriesAgain) {
   EXPECT_EQ(maps->Save("shutdown", live(), true), SaveResult::kFailed);  // not "unchanged"
   ::testing::internal::GetCapturedStderr();
   EXPECT_EQ(maps->StatusJson()["save_errors"], 2);
+}
+
+// Issue 15: with an io_context the map is encoded and compared on the writer
+// thread, never in the caller's (the control tick's); every outcome still comes
+// back, "unchanged" and "deferred" included, and a save asked for while one is
+// in flight is answered by its own outcome.
+TEST_F(MapServiceTest, OnTheWriterThreadTheMapIsEncodedComparedAndWrittenAndEveryOutcomeComesBack) {
+  boost::asio::io_context io;
+  MapService maps(dir_ + "/state", [this] { return now_; }, MapService::kDefaultMinIntervalS, &io);
+  std::vector<SaveResult> outcomes;
+  maps.set_written([&](SaveResult r) { outcomes.push_back(r); });
+  const auto control = std::this_thread::get_id();
+  int encoded = 0, encoded_here = 0;
+  const auto source = [&] {
+    return [&] {
+      return MapEncoder([&, m = live_] {
+        ++encoded;
+        encoded_here += std::this_thread::get_id() == control;
+        return m;
+      });
+    };
+  };
+  const auto wait = [&](size_t n) {
+    for (int i = 0; i < 500 && outcomes.size() < n; ++i) {
+      io.run_for(std::chrono::milliseconds(10));
+      io.restart();
+    }
+    return outcomes.size() == n;
+  };
+  maps.OnMissionStarted();
+  live_ = MapWithLines(2);
+  EXPECT_EQ(maps.Save("model", source()), SaveResult::kQueued);
+  EXPECT_EQ(encoded, 0);  // not in the caller
+  ASSERT_TRUE(wait(1));
+  EXPECT_EQ(outcomes.back(), SaveResult::kSaved);
+  EXPECT_EQ(OnDisk()->map["lines"].size(), 2u);
+  Advance(1);
+  EXPECT_EQ(maps.Save("stop", source()), SaveResult::kQueued);
+  ASSERT_TRUE(wait(2));
+  EXPECT_EQ(outcomes.back(), SaveResult::kUnchanged);
+  // Changed, 2 s after the write: deferred, then written by Poll in its time.
+  live_ = MapWithLines(3);
+  Advance(1);
+  EXPECT_EQ(maps.Save("cell", source()), SaveResult::kQueued);
+  ASSERT_TRUE(wait(3));
+  EXPECT_EQ(outcomes.back(), SaveResult::kDeferred);
+  EXPECT_TRUE(maps.save_pending());
+  Advance(MapService::kDefaultMinIntervalS);
+  maps.Poll(source());
+  ASSERT_TRUE(wait(4));
+  EXPECT_EQ(outcomes.back(), SaveResult::kSaved);
+  EXPECT_EQ(OnDisk()->map["lines"].size(), 3u);
+  EXPECT_EQ(OnDisk()->reason, "cell");
+  // Two saves back to back (the second while the first is in flight): one
+  // outcome, the second's (the newer map).
+  Advance(MapService::kDefaultMinIntervalS);
+  live_ = MapWithLines(4);
+  EXPECT_EQ(maps.Save("model", source()), SaveResult::kQueued);
+  live_ = MapWithLines(5);
+  EXPECT_EQ(maps.Save("stop", source(), /*final=*/true), SaveResult::kQueued);
+  ASSERT_TRUE(wait(5));
+  io.run_for(std::chrono::milliseconds(50));
+  EXPECT_EQ(outcomes.size(), 5u);
+  EXPECT_EQ(outcomes.back(), SaveResult::kSaved);
+  EXPECT_EQ(OnDisk()->map["lines"].size(), 5u);
+  EXPECT_EQ(OnDisk()->reason, "stop");
+  EXPECT_EQ(encoded, 6);
+  EXPECT_EQ(encoded_here, 0);
+  const auto s = maps.StatusJson();
+  EXPECT_EQ(s["saves"], 4);
+  EXPECT_EQ(s["unchanged"], 1);
+  EXPECT_EQ(s["deferred"], 1);
+  EXPECT_EQ(s["writing"], false);
+  // At shutdown: synchronous, in the caller, truthful.
+  live_ = MapWithLines(6);
+  EXPECT_EQ(maps.Flush("shutdown", source()), SaveResult::kSaved);
+  EXPECT_EQ(encoded_here, 1);
+  EXPECT_EQ(OnDisk()->map["lines"].size(), 6u);
+  EXPECT_EQ(maps.Flush("shutdown", source()), SaveResult::kUnchanged);
 }
 
 }  // namespace
