@@ -90,6 +90,19 @@ void BM_EkfRemoveLine(benchmark::State& state) {
   state.counters["state_dim"] = static_cast<double>(p.ekf.x().size());
 }
 
+// One prediction (every control period): the robot block and the pose's
+// cross-covariances with every line (slam/odometry.h calibrated wheel motion).
+void BM_EkfPredict(benchmark::State& state) {
+  Problem p = MakeProblem(static_cast<int>(state.range(0)));
+  const WheelMotion wheels{0.0100, 0.0102};
+  for (auto _ : state) {
+    p.ekf.Predict(wheels, 0.23, MotionNoise{}, 1e-7, 2e-4);
+    benchmark::DoNotOptimize(p.ekf.x().data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["state_dim"] = static_cast<double>(p.ekf.x().size());
+}
+
 void Sizes(benchmark::internal::Benchmark* b) {
   for (const int lines : {50, 100, 200, 500, 1000}) b->Arg(lines);
   b->Unit(benchmark::kMicrosecond);
@@ -97,6 +110,7 @@ void Sizes(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_EkfUpdateReference)->Apply(Sizes);
 BENCHMARK(BM_EkfUpdateInPlace)->Apply(Sizes);
 BENCHMARK(BM_EkfRemoveLine)->Apply(Sizes);
+BENCHMARK(BM_EkfPredict)->Apply(Sizes);
 
 }  // namespace
 }  // namespace irslam::slam
