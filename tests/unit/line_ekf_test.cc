@@ -144,7 +144,9 @@ TEST(LineEkfTest, InPlaceStorageMatchesDenseBookkeeping) {
       }
       Eigen::MatrixXd next(n - 2, n - 2);
       for (size_t a = 0; a < keep.size(); ++a) {
-        for (size_t b = 0; b < keep.size(); ++b) next(static_cast<long>(a), static_cast<long>(b)) = dense(keep[a], keep[b]);
+        for (size_t b = 0; b < keep.size(); ++b) {
+          next(static_cast<long>(a), static_cast<long>(b)) = dense(keep[a], keep[b]);
+        }
       }
       dense = next;
       ekf.RemoveLine(i);
