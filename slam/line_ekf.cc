@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 
 #include "slam/line_extraction.h"
@@ -66,10 +67,42 @@ LineEkf::LineEkf() : x_(Eigen::VectorXd::Zero(kFirstLine)), P_(Eigen::MatrixXd::
   x_.segment<3>(kCalib).setOnes();
 }
 
+double LineEkf::Cov(long i, long j) const {
+  if (i < j && BlockStart(i) != BlockStart(j)) std::swap(i, j);
+  return P_(i, j);
+}
+
+Eigen::MatrixXd LineEkf::P() const {
+  const long n = x_.size();
+  Eigen::MatrixXd p = P_.topLeftCorner(n, n).selfadjointView<Eigen::Lower>();
+  // The diagonal blocks as stored (their upper entries are kept, not mirrored).
+  p.topLeftCorner<kFirstLine, kFirstLine>() = P_.topLeftCorner<kFirstLine, kFirstLine>();
+  for (int i = 0; i < num_lines(); ++i) p(RhoIndex(i), ThetaIndex(i)) = P_(RhoIndex(i), ThetaIndex(i));
+  return p;
+}
+
+void LineEkf::SetCovariance(const Eigen::MatrixXd& p) {
+  const long n = x_.size();
+  assert(p.rows() == n && p.cols() == n);
+  Reserve(n);
+  P_.topLeftCorner(n, n) = p;
+}
+
+void LineEkf::Reserve(long n) {
+  if (P_.rows() >= n) return;
+  const long old = std::min<long>(x_.size(), P_.rows());
+  Eigen::MatrixXd grown = Eigen::MatrixXd::Zero(n + kSpareRows, n + kSpareRows);
+  grown.topLeftCorner(old, old) = P_.topLeftCorner(old, old);
+  P_.swap(grown);
+}
+
 void LineEkf::SetCalibration(const OdometryCalibration& c, const Eigen::Vector3d& sigma) {
   x_.segment<3>(kCalib) << c.left, c.right, c.base;
-  P_.middleRows<3>(kCalib).setZero();
-  P_.middleCols<3>(kCalib).setZero();
+  const long n = x_.size();
+  // Rows and columns 3..5 of the stored part: within the robot block, and below it.
+  P_.block<3, kFirstLine>(kCalib, 0).setZero();
+  P_.block<kFirstLine, 3>(0, kCalib).setZero();
+  P_.block(kFirstLine, kCalib, n - kFirstLine, 3).setZero();
   P_.block<3, 3>(kCalib, kCalib) = sigma.cwiseAbs2().asDiagonal();
 }
 
@@ -99,8 +132,13 @@ void LineEkf::Predict(const WheelMotion& w, double wheel_base_m, const MotionNoi
   }
   P_.topLeftCorner<6, 6>() = top;
   if (rest > 0) {
-    P_.topRightCorner(3, rest) = f.topRows<3>() * P_.topRightCorner(6, rest);
-    P_.bottomLeftCorner(rest, 3) = P_.topRightCorner(3, rest).transpose();
+    // The pose's cross-covariances with the lines, F P(0:6, lines), from the
+    // stored columns 0..5 below the robot block (contiguous).
+    rows_ = P_.block(kFirstLine, 0, rest, 6).transpose();
+    // (Operand and result types as in the former f * P.topRightCorner(6, rest):
+    // the same Eigen kernel, the same rounding.)
+    pose_cross_.noalias() = f.topRows<3>() * rows_.topLeftCorner(6, rest);
+    P_.block(kFirstLine, 0, rest, 3) = pose_cross_.transpose();
   }
 }
 
@@ -112,12 +150,16 @@ void LineEkf::Predict(const Motion& m, const MotionNoise& noise) {
   x_(0) = n.x;
   x_(1) = n.y;
   x_(2) = n.theta;
-  const long rest = x_.size() - 3;
+  const long dim = x_.size(), rest = dim - 3;
   P_.topLeftCorner<3, 3>() = f * P_.topLeftCorner<3, 3>() * f.transpose() + q;
-  if (rest > 0) {
-    P_.topRightCorner(3, rest) = f * P_.topRightCorner(3, rest);
-    P_.bottomLeftCorner(rest, 3) = P_.topRightCorner(3, rest).transpose();
-  }
+  // P(0:3, 3:dim): the calibration's columns within the robot block, the lines'
+  // from the stored columns 0..2 below it.
+  rows_.resize(3, rest);
+  rows_.leftCols<3>() = P_.block<3, 3>(0, kCalib);
+  rows_.rightCols(dim - kFirstLine) = P_.block(kFirstLine, 0, dim - kFirstLine, 3).transpose();
+  pose_cross_.noalias() = f * rows_.topLeftCorner(3, rest);
+  P_.block<3, 3>(0, kCalib) = pose_cross_.leftCols<3>();
+  P_.block(3, 0, rest, 3) = pose_cross_.transpose();
 }
 
 int LineEkf::AddLine(const LineObservation& z, const Eigen::Matrix2d& r) {
@@ -126,14 +168,17 @@ int LineEkf::AddLine(const LineObservation& z, const Eigen::Matrix2d& r) {
   Eigen::Matrix2d gz;
   ObservationToMap(pose(), z, &rho, &theta, &gp, &gz);
   const long n = x_.size();
+  Reserve(n + 2);
   x_.conservativeResize(n + 2);
   x_(n) = rho;
   x_(n + 1) = theta;
-  P_.conservativeResize(n + 2, n + 2);
-  // Cross-covariance with everything: G_pose * P(pose, :).
-  const Eigen::MatrixXd cross = gp * P_.topLeftCorner(3, n);
-  P_.block(n, 0, 2, n) = cross;
-  P_.block(0, n, n, 2) = cross.transpose();
+  // Cross-covariance with everything: G_pose * P(pose, :), P(pose, :) from the
+  // robot block and the stored columns 0..2 below it.
+  rows_.resize(3, n);
+  rows_.leftCols<kFirstLine>() = P_.topLeftCorner<3, kFirstLine>();
+  rows_.rightCols(n - kFirstLine) = P_.block(kFirstLine, 0, n - kFirstLine, 3).transpose();
+  line_cross_.noalias() = gp * rows_.topLeftCorner(3, n);
+  P_.block(n, 0, 2, n) = line_cross_;
   P_.block<2, 2>(n, n) = gp * P_.topLeftCorner<3, 3>() * gp.transpose() + gz * r * gz.transpose();
   return static_cast<int>((n - kFirstLine) / 2);
 }
@@ -144,7 +189,7 @@ void LineEkf::Restart(const Pose2& pose, const Eigen::Matrix3d& pose_cov,
   const Eigen::Matrix3d calib_cov = P_.block<3, 3>(kCalib, kCalib);
   const long n = kFirstLine + 2 * static_cast<long>(lines.size());
   x_ = Eigen::VectorXd::Zero(n);
-  P_ = Eigen::MatrixXd::Zero(n, n);
+  P_ = Eigen::MatrixXd::Zero(n + kSpareRows, n + kSpareRows);
   x_.head<3>() << pose.x, pose.y, NormalizeAngle(pose.theta);
   P_.topLeftCorner<3, 3>() = 0.5 * (pose_cov + pose_cov.transpose());
   x_.segment<3>(kCalib) = calib;
@@ -162,12 +207,16 @@ void LineEkf::RemoveLine(int i) {
   const long at = RhoIndex(i), n = x_.size(), tail = n - at - 2;
   x_.segment(at, tail) = x_.tail(tail).eval();
   x_.conservativeResize(n - 2);
-  Eigen::MatrixXd p(n - 2, n - 2);
-  p.topLeftCorner(at, at) = P_.topLeftCorner(at, at);
-  p.topRightCorner(at, tail) = P_.topRightCorner(at, tail);
-  p.bottomLeftCorner(tail, at) = P_.bottomLeftCorner(tail, at);
-  p.bottomRightCorner(tail, tail) = P_.bottomRightCorner(tail, tail);
-  P_ = std::move(p);
+  // In place, the stored part only: the columns before line i lose rows at and
+  // at+1; each column after it moves two columns left and two rows up (column j
+  // holds rows BlockStart(j)..n-1). Destinations precede their sources.
+  double* const d = P_.data();
+  const long ld = P_.outerStride();
+  for (long j = 0; j < at; ++j) std::copy(d + j * ld + at + 2, d + j * ld + n, d + j * ld + at);
+  for (long j = at + 2; j < n; ++j) {
+    const long top = BlockStart(j);
+    std::copy(d + j * ld + top, d + j * ld + n, d + (j - 2) * ld + top - 2);
+  }
 }
 
 void LineEkf::FindColumns(const Eigen::MatrixXd& h) {
@@ -193,7 +242,7 @@ Eigen::MatrixXd LineEkf::ProjectedCov(const Eigen::MatrixXd& h) const {
   Eigen::MatrixXd hc(h.rows(), c), pc(c, c);
   for (long a = 0; a < c; ++a) {
     hc.col(a) = h.col(cols[static_cast<size_t>(a)]);
-    for (long b = 0; b < c; ++b) pc(a, b) = P_(cols[static_cast<size_t>(a)], cols[static_cast<size_t>(b)]);
+    for (long b = 0; b < c; ++b) pc(a, b) = Cov(cols[static_cast<size_t>(a)], cols[static_cast<size_t>(b)]);
   }
   return hc * pc * hc.transpose();
 }
@@ -201,10 +250,16 @@ Eigen::MatrixXd LineEkf::ProjectedCov(const Eigen::MatrixXd& h) const {
 void LineEkf::UpdateColumns(const Eigen::VectorXd& y, const std::vector<int>& cols, const Eigen::MatrixXd& hc,
                             const Eigen::MatrixXd& r) {
   const long n = x_.size(), m = y.size();
-  // P H' (n x m) from H's non-zero columns only: sum over them of P(:, j) H(:, j)'.
+  // P H' (n x m) from H's non-zero columns only: sum over them of P(:, c) H(:, c)'.
+  // P(:, c) is gathered from the stored part: the rows above c's block from row c,
+  // the rest from column c.
   pht_.setZero(n, m);
+  column_.resize(n);
   for (size_t j = 0; j < cols.size(); ++j) {
-    pht_.noalias() += P_.col(cols[j]) * hc.col(static_cast<long>(j)).transpose();
+    const long c = cols[j], top = BlockStart(c);
+    column_.head(top) = P_.row(c).head(top).transpose();
+    column_.tail(n - top) = P_.col(c).segment(top, n - top);
+    pht_.noalias() += column_ * hc.col(static_cast<long>(j)).transpose();
   }
   // S = H P H' + R (m x m): H times the rows of P H' at H's columns.
   Eigen::MatrixXd s = r;
@@ -223,32 +278,33 @@ void LineEkf::UpdateColumns(const Eigen::VectorXd& y, const std::vector<int>& co
   uk_.rightCols(m) = k;
   // Joseph form, exactly: (I-KH) P (I-KH)' + K R K' = P - K H P - P H' K' + K S K'
   //                                                 = P - (K U' + U K').
-  // A symmetric rank-2m update of P in place: the lower triangle is computed one
-  // panel of kPanel columns at a time, and each panel is mirrored into the upper
-  // triangle right after (a final mirror of the whole lower triangle reads P across
-  // its rows, a TLB page per element, and costs more than the update at 1,000
-  // lines). No n x n temporary; P stays exactly symmetric.
-  constexpr long kPanel = 64;
+  // A symmetric rank-2m update of P's lower triangle in place, one panel of kPanel
+  // columns at a time (a GEMM of depth 2m each); each panel's diagonal square is
+  // made exactly symmetric (the diagonal blocks are stored whole). Nothing above
+  // the panels' diagonal squares is written: half the memory traffic of a full
+  // update. No n x n temporary.
+  constexpr long kPanel = 64;  // even: a line's block never straddles two panels
   for (long jb = 0; jb < n; jb += kPanel) {
-    const long b = std::min(kPanel, n - jb), rest = n - jb - b;
+    const long b = std::min(kPanel, n - jb);
     P_.block(jb, jb, n - jb, b).noalias() -= ku_.bottomRows(n - jb) * uk_.middleRows(jb, b).transpose();
     auto diagonal = P_.block(jb, jb, b, b);
     diagonal.triangularView<Eigen::StrictlyUpper>() = diagonal.transpose();
-    if (rest > 0) P_.block(jb, jb + b, b, rest) = P_.block(jb + b, jb, rest, b).transpose();
   }
   NormalizeAllLines();
 }
 
 void LineEkf::UpdateReference(const Eigen::VectorXd& y, const Eigen::MatrixXd& h, const Eigen::MatrixXd& r) {
-  const Eigen::MatrixXd pht = P_ * h.transpose();           // n x m
+  const long n = x_.size();
+  Eigen::MatrixXd p = P();
+  const Eigen::MatrixXd pht = p * h.transpose();             // n x m
   const Eigen::MatrixXd s = h * pht + r;                     // m x m
   const Eigen::MatrixXd k = pht * s.inverse();               // n x m
   x_ += k * y;
   x_(2) = NormalizeAngle(x_(2));
   // Joseph form, in O(n^2 m): A = (I - K H) P; P = A (I - K H)' + K R K'.
-  const Eigen::MatrixXd a = P_ - k * pht.transpose();
-  P_ = a - (a * h.transpose()) * k.transpose() + k * r * k.transpose();
-  P_ = 0.5 * (P_ + P_.transpose()).eval();
+  const Eigen::MatrixXd a = p - k * pht.transpose();
+  p = a - (a * h.transpose()) * k.transpose() + k * r * k.transpose();
+  P_.topLeftCorner(n, n) = 0.5 * (p + p.transpose());
   NormalizeAllLines();
 }
 
@@ -261,8 +317,13 @@ void LineEkf::NormalizeLineState(int i) {
   if (x_(at) < 0) {
     x_(at) = -x_(at);
     x_(at + 1) += M_PI;
-    P_.row(at) *= -1;
-    P_.col(at) *= -1;
+    // Row and column at of P, in the stored part: left of the line's block, within
+    // it (the diagonal entry flips twice), below it.
+    const long n = x_.size();
+    P_.row(at).head(at) *= -1;
+    P_(at + 1, at) *= -1;
+    P_(at, at + 1) *= -1;
+    P_.col(at).segment(at + 2, n - at - 2) *= -1;
   }
   x_(at + 1) = NormalizeAngle(x_(at + 1));
 }

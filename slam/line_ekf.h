@@ -13,8 +13,17 @@
 // Update cost: a measurement touches only the robot pose, the observed line and the
 // lines of its pseudo-measurements (eqs. 11-12): H has at most ~9 non-zero columns.
 // Update works from those columns and writes P in place (no n x n temporaries):
-// O(n m) for P H', then one symmetric rank-2m update of P (the Joseph form
-// regrouped; lower triangle computed, mirrored panel by panel).
+// O(n m) for P H', then one symmetric rank-2m update of P's lower part (the
+// Joseph form regrouped).
+//
+// Storage of P: only its block-lower part is kept. P is partitioned into the
+// state's blocks (robot and calibration 6, then 2 per line); every block on or
+// below the block diagonal is valid, the diagonal blocks whole (Predict and AddLine
+// can leave them asymmetric in the last bit, as the full matrix was before); the
+// blocks above the diagonal are not maintained. Readers take P(i, j) with i < j in
+// different blocks from P(j, i) (Cov, PoseCov, LineCov; P() assembles the whole
+// matrix). P lives in the top-left corner of a larger buffer, so that AddLine and
+// RemoveLine work in place (no reallocation until the spare rows run out).
 #ifndef IRSLAM_SLAM_LINE_EKF_H_
 #define IRSLAM_SLAM_LINE_EKF_H_
 
@@ -60,12 +69,18 @@ class LineEkf {
   int num_lines() const { return static_cast<int>((x_.size() - kFirstLine) / 2); }
   Pose2 pose() const { return {x_(0), x_(1), x_(2)}; }
   OdometryCalibration calibration() const { return {x_(kCalib), x_(kCalib + 1), x_(kCalib + 2)}; }
-  Eigen::Matrix3d CalibrationCov() const { return P_.block<3, 3>(kCalib, kCalib); }
   double rho(int i) const { return x_(RhoIndex(i)); }
   double theta(int i) const { return x_(ThetaIndex(i)); }
   const Eigen::VectorXd& x() const { return x_; }
-  const Eigen::MatrixXd& P() const { return P_; }
+  // Covariance blocks, O(1) (diagonal blocks: stored whole).
+  Eigen::Matrix3d PoseCov() const { return P_.topLeftCorner<3, 3>(); }
+  Eigen::Matrix3d CalibrationCov() const { return P_.block<3, 3>(kCalib, kCalib); }
   Eigen::Matrix2d LineCov(int i) const { return P_.block<2, 2>(RhoIndex(i), RhoIndex(i)); }
+  // One entry of P, from the stored block-lower part.
+  double Cov(long i, long j) const;
+  // The whole covariance (n x n), assembled from the stored part: an O(n^2) copy,
+  // for tests and diagnostics, not for the control loop.
+  Eigen::MatrixXd P() const;
 
   // Sets the calibration parameters and their (diagonal) sigmas; only before the
   // first line (their cross-covariances are zeroed).
@@ -113,20 +128,31 @@ class LineEkf {
 
   // Puts line i back to rho >= 0, theta in (-pi, pi] (flipping its covariance rows).
   void NormalizeLineState(int i);
-  // For tests: direct access.
+  // For tests: direct access to x; P set whole (x's size; only its block-lower
+  // part is kept).
   Eigen::VectorXd& mutable_x() { return x_; }
-  Eigen::MatrixXd& mutable_P() { return P_; }
+  void SetCovariance(const Eigen::MatrixXd& p);
 
  private:
+  // Spare rows and columns kept behind P when it grows (32 lines).
+  static constexpr long kSpareRows = 64;
+  // The first index of the block holding state index i (robot and calibration,
+  // or a line).
+  static constexpr long BlockStart(long i) { return i < kFirstLine ? 0 : i - ((i - kFirstLine) & 1); }
+  // Makes room for an n x n P (keeps the current one).
+  void Reserve(long n);
   // H's non-zero columns and their values, found by a scan of dense H.
   void FindColumns(const Eigen::MatrixXd& h);
   void NormalizeAllLines();
 
   Eigen::VectorXd x_;
+  // P is P_'s top-left n x n corner (n = x_.size()), block-lower part only.
   Eigen::MatrixXd P_;
-  // Update's workspace (kept to avoid allocating while the state size is unchanged).
+  // Workspace (kept to avoid allocating while the state size is unchanged).
   std::vector<int> cols_;
-  Eigen::MatrixXd hc_, pht_, ku_, uk_;
+  Eigen::VectorXd column_;
+  Eigen::MatrixXd hc_, pht_, ku_, uk_, rows_, line_cross_;
+  Eigen::Matrix<double, 3, Eigen::Dynamic> pose_cross_;
 };
 
 }  // namespace irslam::slam

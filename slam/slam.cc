@@ -80,7 +80,7 @@ Eigen::Matrix3d Slam::map_pose_cov() const {
   const double rot = map_rotation();
   Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
   r.topLeftCorner<2, 2>() << std::cos(rot), -std::sin(rot), std::sin(rot), std::cos(rot);
-  return r * ekf_.P().topLeftCorner<3, 3>() * r.transpose();
+  return r * ekf_.PoseCov() * r.transpose();
 }
 
 std::vector<LineFeature> Slam::map_lines() const {

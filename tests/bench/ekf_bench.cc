@@ -39,7 +39,7 @@ Problem MakeProblem(int n_lines) {
   for (long i = 0; i < n; ++i) {
     for (long c = 0; c < 3; ++c) g(i, c) = 0.01 * std::cos(0.7 * static_cast<double>(i) + 1.3 * static_cast<double>(c));
   }
-  p.ekf.mutable_P() = Eigen::MatrixXd::Identity(n, n) * 1e-4 + g * g.transpose();
+  p.ekf.SetCovariance(Eigen::MatrixXd::Identity(n, n) * 1e-4 + g * g.transpose());
   const Eigen::Matrix2d r = Eigen::Matrix2d::Identity() * 1e-4;
   p.h = Eigen::MatrixXd::Zero(3, n);
   const int k = n_lines / 2;
@@ -60,7 +60,7 @@ void BM_EkfUpdateReference(benchmark::State& state) {
   Problem p = MakeProblem(static_cast<int>(state.range(0)));
   for (auto _ : state) {
     p.ekf.UpdateReference(p.y, p.h, p.r);
-    benchmark::DoNotOptimize(p.ekf.P().data());
+    benchmark::DoNotOptimize(p.ekf.x().data());
     benchmark::ClobberMemory();
   }
   state.counters["state_dim"] = static_cast<double>(p.ekf.x().size());
@@ -70,7 +70,7 @@ void BM_EkfUpdateInPlace(benchmark::State& state) {
   Problem p = MakeProblem(static_cast<int>(state.range(0)));
   for (auto _ : state) {
     p.ekf.Update(p.y, p.h, p.r);
-    benchmark::DoNotOptimize(p.ekf.P().data());
+    benchmark::DoNotOptimize(p.ekf.x().data());
     benchmark::ClobberMemory();
   }
   state.counters["state_dim"] = static_cast<double>(p.ekf.x().size());
@@ -90,6 +90,19 @@ void BM_EkfRemoveLine(benchmark::State& state) {
   state.counters["state_dim"] = static_cast<double>(p.ekf.x().size());
 }
 
+// One prediction (every control period): the robot block and the pose's
+// cross-covariances with every line (slam/odometry.h calibrated wheel motion).
+void BM_EkfPredict(benchmark::State& state) {
+  Problem p = MakeProblem(static_cast<int>(state.range(0)));
+  const WheelMotion wheels{0.0100, 0.0102};
+  for (auto _ : state) {
+    p.ekf.Predict(wheels, 0.23, MotionNoise{}, 1e-7, 2e-4);
+    benchmark::DoNotOptimize(p.ekf.x().data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["state_dim"] = static_cast<double>(p.ekf.x().size());
+}
+
 void Sizes(benchmark::internal::Benchmark* b) {
   for (const int lines : {50, 100, 200, 500, 1000}) b->Arg(lines);
   b->Unit(benchmark::kMicrosecond);
@@ -97,6 +110,7 @@ void Sizes(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_EkfUpdateReference)->Apply(Sizes);
 BENCHMARK(BM_EkfUpdateInPlace)->Apply(Sizes);
 BENCHMARK(BM_EkfRemoveLine)->Apply(Sizes);
+BENCHMARK(BM_EkfPredict)->Apply(Sizes);
 
 }  // namespace
 }  // namespace irslam::slam

@@ -102,7 +102,7 @@ void BM_EkfUpdate(benchmark::State& state) {
     ekf.Update(y, h, rr);
     state.PauseTiming();
     ekf.mutable_x() = x0;
-    ekf.mutable_P() = p0;
+    ekf.SetCovariance(p0);
     state.ResumeTiming();
   }
   state.counters["state_dim"] = static_cast<double>(n);

@@ -78,7 +78,7 @@ Run RunOne(const sim::World& world, robot::CoreOptions o, uint64_t seed, double 
     if (run.t < next_sample) return;
     next_sample = run.t + 0.5;
     const auto& ekf = run.core->slam().ekf();
-    r.pose_sigma.emplace_back(run.t, std::sqrt(ekf.P()(2, 2)) * kDeg);
+    r.pose_sigma.emplace_back(run.t, std::sqrt(ekf.PoseCov()(2, 2)) * kDeg);
     if (ekf.num_lines() > 0) {
       double st = 0, sr = 0;
       for (int i = 0; i < ekf.num_lines(); ++i) {

@@ -92,19 +92,82 @@ TEST(LineEkfTest, RemoveLineDeletesExactlyItsRowsAndColumns) {
   ekf.AddLine({1.0, 0.1}, r);
   ekf.AddLine({2.0, 0.2}, r);
   ekf.AddLine({3.0, 0.3}, r);
-  Eigen::MatrixXd& p = ekf.mutable_P();
+  // A symmetric P whose entry (i, j), i >= j, is 100 i + j.
+  Eigen::MatrixXd p(12, 12);
   for (int i = 0; i < 12; ++i) {
-    for (int j = 0; j < 12; ++j) p(i, j) = 100 * i + j;
+    for (int j = 0; j < 12; ++j) p(i, j) = 100 * std::max(i, j) + std::min(i, j);
   }
+  ekf.SetCovariance(p);
   ekf.RemoveLine(1);  // rows and columns 8 and 9
   ASSERT_EQ(ekf.x().size(), 10);
   EXPECT_DOUBLE_EQ(ekf.rho(0), 1.0);
   EXPECT_DOUBLE_EQ(ekf.rho(1), 3.0);
   EXPECT_DOUBLE_EQ(ekf.x()(4), 1.0);               // the calibration stays
   EXPECT_DOUBLE_EQ(ekf.P()(8, 8), 100 * 10 + 10);  // old (10,10)
-  EXPECT_DOUBLE_EQ(ekf.P()(3, 9), 100 * 3 + 11);   // old (3,11): calibration x line 2
+  EXPECT_DOUBLE_EQ(ekf.P()(3, 9), 100 * 11 + 3);   // old (3,11): calibration x line 2
   EXPECT_DOUBLE_EQ(ekf.P()(9, 0), 100 * 11 + 0);
   EXPECT_DOUBLE_EQ(ekf.P()(7, 5), 100 * 7 + 5);
+}
+
+// P is stored in place with spare rows (block-lower part only): line insertions,
+// predictions and deletions, in any order, give the same P as the dense formulas
+// (G P G' for insertion, F P F' for prediction, rows and columns struck out).
+TEST(LineEkfTest, InPlaceStorageMatchesDenseBookkeeping) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> uni(0, 1);
+  LineEkf ekf;
+  ekf.SetCalibration({1.01, 0.99, 1.02}, Eigen::Vector3d(0.01, 0.01, 0.02));
+  const Eigen::Matrix2d r = (Eigen::Matrix2d() << 1e-4, 0, 0, 1e-3).finished();
+  Eigen::MatrixXd dense = ekf.P();
+  for (int step = 0; step < 300; ++step) {
+    const double u = uni(rng);
+    const long n = ekf.x().size();
+    if (u < 0.5 || ekf.num_lines() < 3) {
+      const LineObservation z{0.5 + 3 * uni(rng), M_PI * (2 * uni(rng) - 1)};
+      double rho, theta;
+      Eigen::Matrix<double, 2, 3> gp;
+      Eigen::Matrix2d gz;
+      ObservationToMap(ekf.pose(), z, &rho, &theta, &gp, &gz);
+      Eigen::MatrixXd g = Eigen::MatrixXd::Zero(n + 2, n);
+      g.topRows(n).setIdentity();
+      g.bottomLeftCorner<2, 3>() = gp;
+      Eigen::MatrixXd next = g * dense * g.transpose();
+      next.bottomRightCorner<2, 2>() += gz * r * gz.transpose();
+      dense = next;
+      ekf.AddLine(z, r);
+    } else if (u < 0.75) {
+      const int i = static_cast<int>(uni(rng) * ekf.num_lines());
+      const long at = LineEkf::RhoIndex(i);
+      std::vector<long> keep;
+      for (long k = 0; k < n; ++k) {
+        if (k != at && k != at + 1) keep.push_back(k);
+      }
+      Eigen::MatrixXd next(n - 2, n - 2);
+      for (size_t a = 0; a < keep.size(); ++a) {
+        for (size_t b = 0; b < keep.size(); ++b) {
+          next(static_cast<long>(a), static_cast<long>(b)) = dense(keep[a], keep[b]);
+        }
+      }
+      dense = next;
+      ekf.RemoveLine(i);
+    } else {
+      const Motion m{0.1 * uni(rng), 0.3 * (uni(rng) - 0.5)};
+      Eigen::MatrixXd f = Eigen::MatrixXd::Identity(n, n);
+      f.topLeftCorner<3, 3>() = Odometry::JacobianPose(ekf.pose(), m);
+      dense = f * dense * f.transpose();
+      dense.topLeftCorner<3, 3>() += Odometry::ProcessNoise(ekf.pose(), m, MotionNoise{});
+      ekf.Predict(m, MotionNoise{});
+    }
+    ASSERT_EQ(ekf.P().rows(), dense.rows());
+    ASSERT_LT((ekf.P() - dense).cwiseAbs().maxCoeff(), 1e-12) << "step " << step;
+    const Eigen::MatrixXd p = ekf.P();
+    for (int i = 0; i < ekf.num_lines(); ++i) {
+      const long at = LineEkf::RhoIndex(i);
+      ASSERT_TRUE((ekf.LineCov(i).array() == p.block<2, 2>(at, at).array()).all());
+    }
+    ASSERT_TRUE((ekf.PoseCov().array() == p.topLeftCorner<3, 3>().array()).all());
+    ASSERT_EQ(ekf.Cov(1, p.rows() - 1), p(1, p.rows() - 1));
+  }
 }
 
 // Two filters fed the same sequence as Slam feeds its filter: the first wall
