@@ -116,7 +116,7 @@ std::optional<World> ParseWorld(std::string_view text, std::string* error) {
   for (const auto& [key, value] : j.items()) {
     static constexpr std::string_view kKnown[] = {"name", "room", "outline", "objects", "start", "seed", "noise"};
     if (std::find(std::begin(kKnown), std::end(kKnown), key) == std::end(kKnown)) {
-      *error = "world: \"" + key + "\" is not a known key";
+      *error = "world: \"" + OneLine(key) + "\" is not a known key";
       return std::nullopt;
     }
   }
