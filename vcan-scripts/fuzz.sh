@@ -54,9 +54,15 @@ for t in "${targets[@]}"; do
   echo "fuzz.sh: $t for ${seconds}s" >&2
   start=$(date +%s)
   result=ok
-  if ! nice -n "${IRSLAM_FUZZ_NICE:-0}" "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" \
-       -timeout=10 -rss_limit_mb=2048 -max_len=8192 -print_final_stats=1 "${extra[@]}" \
-       -artifact_prefix="$build/artifacts/$t-" "$work" "$IRSLAM_ROOT/tests/fuzz/corpus/$t" 2>"$log"; then
+  rc=0
+  nice -n "${IRSLAM_FUZZ_NICE:-0}" "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" \
+    -timeout=10 -rss_limit_mb=2048 -max_len=8192 -print_final_stats=1 "${extra[@]}" \
+    -artifact_prefix="$build/artifacts/$t-" "$work" "$IRSLAM_ROOT/tests/fuzz/corpus/$t" 2>"$log" || rc=$?
+  if [ "$rc" -eq 72 ]; then  # libFuzzer's exit code after SIGINT: stopped by hand, stats printed
+    echo "fuzz.sh: $t interrupted" >&2
+    result=interrupted
+    status=1
+  elif [ "$rc" -ne 0 ]; then
     echo "fuzz.sh: $t FAILED (log: $log; input in $build/artifacts/)" >&2
     tail -40 "$log" >&2
     result=crash
@@ -67,7 +73,7 @@ for t in "${targets[@]}"; do
   printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$(date -u +%FT%TZ)" "$t" "$(( $(date +%s) - start ))" \
     "${execs:-0}" "$result" "$commit" >>"$ledger"
   grep -E "stat::number_of_executed_units|cov:" "$log" | tail -2 >&2 || true
-  awk -F'\t' -v t="$t" 'NR > 1 && $2 == t { n += $4; s += $3; if ($5 != "ok") c++ }
+  awk -F'\t' -v t="$t" 'NR > 1 && $2 == t { n += $4; s += $3; if ($5 == "crash") c++ }
     END { printf "fuzz.sh: %s in total (%s): %d executions, %d s, %d crashes\n", t, FILENAME, n, s, c }' \
     "$ledger" >&2
 done
