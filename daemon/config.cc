@@ -51,7 +51,7 @@ class Reader : public config::Visitor {
     const Frame& f = stack_.back();
     if (f.j != nullptr) {
       for (const auto& [k, v] : f.j->items()) {
-        if (!f.used.count(k)) Fail(Join(path_, k) + " is not a known key");
+        if (!f.used.count(k)) Fail(Join(path_, OneLine(k)) + " is not a known key");
       }
     }
     stack_.pop_back();
@@ -76,7 +76,7 @@ class Reader : public config::Visitor {
   void Finish() {
     const Frame& f = stack_.front();
     for (const auto& [k, v] : f.j->items()) {
-      if (!f.used.count(k)) Fail(k + " is not a known key");
+      if (!f.used.count(k)) Fail(OneLine(k) + " is not a known key");
     }
   }
 

@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "io/json_text.h"
+
 namespace irslam::config {
 namespace {
 
@@ -117,7 +119,7 @@ std::string ReadGpioLine(const json& j, drivers::GpioLineSpec* out) {
       if (!v.is_boolean()) return ".active_low must be true or false";
       out->active_low = v.get<bool>();
     } else {
-      return "." + k + " is not a known key";
+      return "." + OneLine(k) + " is not a known key";
     }
   }
   if (!out->chip.empty() && out->line.empty()) return ".line must be given when chip is";

@@ -1,5 +1,7 @@
 #include "io/json_text.h"
 
+#include <cstdio>
+
 namespace irslam {
 
 int JsonNestingDepth(std::string_view text, int max_depth) {
@@ -59,6 +61,28 @@ std::optional<nlohmann::json> ParseJsonText(std::string_view text, std::string* 
   }
   *error = "not valid JSON";
   return std::nullopt;
+}
+
+std::string OneLine(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u >= 0x20 && u != 0x7f) {
+      out += c;
+    } else if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\r') {
+      out += "\\r";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else {
+      char esc[16];
+      std::snprintf(esc, sizeof esc, "\\u%04x", u);
+      out += esc;
+    }
+  }
+  return out;
 }
 
 std::string DumpJson(const nlohmann::json& j, int indent) {

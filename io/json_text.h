@@ -24,6 +24,10 @@ int JsonNestingDepth(std::string_view text, int max_depth);
 std::optional<nlohmann::json> ParseJsonText(std::string_view text, std::string* error,
                                             int max_depth = kMaxJsonDepth);
 
+// A key from a parsed file as it goes into a one-line message: control
+// characters (a "\n" in a key) as JSON escapes (\n, \u0001), the rest as is.
+std::string OneLine(std::string_view text);
+
 // Serialises for output to a person or a socket: invalid UTF-8 in strings is
 // replaced (U+FFFD), never thrown.
 std::string DumpJson(const nlohmann::json& j, int indent = -1);

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "io/json_text.h"
+
 namespace irslam::options {
 
 std::string FormatNumber(double d) {
@@ -63,7 +65,7 @@ bool ReadObject(const nlohmann::json& object, std::string_view path, const std::
       if (e.name == key) found = &e;
     }
     if (found == nullptr) {
-      *error = prefix + key + " is not a known key";
+      *error = prefix + OneLine(key) + " is not a known key";
       return false;
     }
     const std::string what = ReadEntry(value, *found);

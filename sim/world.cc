@@ -58,7 +58,7 @@ bool CheckKnownKeys(const json& j, std::string* error) {
     static constexpr std::string_view kKnown[] = {"name",  "room", "outline", "objects",
                                                   "start", "seed", "noise"};
     if (std::find(std::begin(kKnown), std::end(kKnown), key) == std::end(kKnown)) {
-      *error = "world: \"" + key + "\" is not a known key";
+      *error = "world: \"" + OneLine(key) + "\" is not a known key";
       return false;
     }
   }

@@ -3,10 +3,23 @@
 # AddressSanitizer + UndefinedBehaviorSanitizer): JSON-RPC request lines, whole
 # API sessions (many lines on one connection through the real server), CAN
 # frames (through the decoder, the controller client and the whole core), world
-# files, config files and the daemon's saved-map files. Each runs SECONDS (default 60) from its committed seed
-# corpus in tests/fuzz/corpus/<name>/; any crash fails (exit 1) and leaves its
-# input in build-fuzz/artifacts/.
+# files, config files, the daemon's saved-map files and candump -L logs. Each
+# runs SECONDS (default 60) from its committed seed corpus in
+# tests/fuzz/corpus/<name>/ plus the corpus grown by earlier runs; any crash
+# fails (exit 1) and leaves its input in build-fuzz/artifacts/.
 #   vcan-scripts/fuzz.sh [SECONDS] [TARGET...]
+# Environment:
+#   IRSLAM_FUZZ_STATE  where the grown corpora, the logs and the ledger are kept
+#                      (default build-fuzz/); point it at a directory the CI keeps
+#                      between runs and the corpora and the execution totals
+#                      accumulate across runs at no extra time.
+#   IRSLAM_FUZZ_RUNS   also stop each target after this many executions.
+#   IRSLAM_FUZZ_NICE   run the fuzzers at this niceness (e.g. 19 for a long
+#                      campaign on a shared machine).
+# Every run appends one line per target to $IRSLAM_FUZZ_STATE/ledger.tsv (UTC
+# end time, target, seconds, executions, result, commit) and prints each target's
+# total over the ledger; its libFuzzer log (final stats included) is kept in
+# $IRSLAM_FUZZ_STATE/logs/.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 seconds=${1:-60}
@@ -16,26 +29,52 @@ targets=("$@")
 
 bash "$IRSLAM_ROOT/vcan-scripts/install-deps.sh" --fuzz
 build=$IRSLAM_ROOT/build-fuzz
+state=${IRSLAM_FUZZ_STATE:-$build}
+launcher=()
+if command -v ccache >/dev/null; then
+  launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
 CC=clang CXX=clang++ cmake -S "$IRSLAM_ROOT" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DIRSLAM_FUZZ=ON -DIRSLAM_BENCHMARKS=OFF -DIRSLAM_WERROR=ON >/dev/null
+  -DIRSLAM_FUZZ=ON -DIRSLAM_BENCHMARKS=OFF -DIRSLAM_WERROR=ON "${launcher[@]}" >/dev/null
 cmake --build "$build" -j"$(nproc)" --target fuzz_all
 
-mkdir -p "$build/artifacts"
+commit=$(git -C "$IRSLAM_ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
+mkdir -p "$build/artifacts" "$state/logs"
+ledger=$state/ledger.tsv
+[ -f "$ledger" ] || printf 'ended\ttarget\tseconds\texecutions\tresult\tcommit\n' >"$ledger"
+extra=()
+[ -z "${IRSLAM_FUZZ_RUNS:-}" ] || extra+=(-runs="$IRSLAM_FUZZ_RUNS")
 status=0
 for t in "${targets[@]}"; do
-  work=$build/corpus/$t  # new inputs go here, the committed seeds stay as they are
+  work=$state/corpus/$t  # new inputs go here, the committed seeds stay as they are
   mkdir -p "$work"
   # The shipped config is a seed too (not copied into the corpus: one file).
   if [ "$t" = config ]; then cp "$IRSLAM_ROOT/daemon/irslamd.conf" "$work/shipped.conf"; fi
+  log=$state/logs/$t-$(date -u +%Y%m%dT%H%M%SZ).log
   echo "fuzz.sh: $t for ${seconds}s" >&2
-  if ! "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
-       -max_len=8192 -print_final_stats=1 -artifact_prefix="$build/artifacts/$t-" \
-       "$work" "$IRSLAM_ROOT/tests/fuzz/corpus/$t" 2>"$build/$t.log"; then
-    echo "fuzz.sh: $t FAILED (log: $build/$t.log; input in $build/artifacts/)" >&2
-    tail -40 "$build/$t.log" >&2
+  start=$(date +%s)
+  result=ok
+  rc=0
+  nice -n "${IRSLAM_FUZZ_NICE:-0}" "$build/tests/fuzz/fuzz_$t" -max_total_time="$seconds" \
+    -timeout=10 -rss_limit_mb=2048 -max_len=8192 -print_final_stats=1 "${extra[@]}" \
+    -artifact_prefix="$build/artifacts/$t-" "$work" "$IRSLAM_ROOT/tests/fuzz/corpus/$t" 2>"$log" || rc=$?
+  if [ "$rc" -eq 72 ]; then  # libFuzzer's exit code after SIGINT: stopped by hand, stats printed
+    echo "fuzz.sh: $t interrupted" >&2
+    result=interrupted
     status=1
-  else
-    grep -E "stat::number_of_executed_units|cov:" "$build/$t.log" | tail -2 >&2 || true
+  elif [ "$rc" -ne 0 ]; then
+    echo "fuzz.sh: $t FAILED (log: $log; input in $build/artifacts/)" >&2
+    tail -40 "$log" >&2
+    result=crash
+    status=1
   fi
+  cp "$log" "$build/$t.log"
+  execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$(date -u +%FT%TZ)" "$t" "$(( $(date +%s) - start ))" \
+    "${execs:-0}" "$result" "$commit" >>"$ledger"
+  grep -E "stat::number_of_executed_units|cov:" "$log" | tail -2 >&2 || true
+  awk -F'\t' -v t="$t" 'NR > 1 && $2 == t { n += $4; s += $3; if ($5 == "crash") c++ }
+    END { printf "fuzz.sh: %s in total (%s): %d executions, %d s, %d crashes\n", t, FILENAME, n, s, c }' \
+    "$ledger" >&2
 done
 exit $status

@@ -1,6 +1,13 @@
 // libFuzzer target: arbitrary CAN frames (16-byte struct can_frame each, ids and
-// DLCs included) through the decoder, the motor-controller client and the whole
-// core (SLAM, mission), with control periods in between, as irslamd sees them.
+// DLCs included) through the decoder (proto::Decode, the candump text), the
+// motor-controller client and the whole core (SLAM, mission) as irslamd sees
+// them: 2 ms apart, a control period (Tick) after every 10th frame, `start` at
+// the first period it is allowed; then the core's status and map serialised as
+// the API serves them. A fresh core per input, so no state carries over.
+// Slower than the parsers (about 1.6 ms per input with ASan on this 2-core
+// host): the time is the core's own work (the EKF's predict per wheel-tick
+// frame, the decoder, the JSON), not the harness; the core is not reused across
+// inputs, which would make a crash depend on earlier inputs.
 #include <linux/can.h>
 
 #include <cstddef>

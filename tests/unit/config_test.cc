@@ -71,6 +71,20 @@ TEST(ConfigTest, RejectsUnknownKeysByFullName) {
   EXPECT_EQ(error, "config: walls is not a known key");
 }
 
+// fuzz_world found it (2026-12-02), the config echoed keys the same way: a key
+// with an escaped newline came back as a two-line error.
+TEST(ConfigTest, AnUnknownKeyWithAControlCharacterIsStillOneLine) {
+  DaemonSettings o;
+  std::string error;
+  EXPECT_FALSE(ParseConfig(R"({"a\nb": 1})", &o, &error));
+  EXPECT_EQ(error, R"(config: a\nb is not a known key)");
+  EXPECT_FALSE(ParseConfig(R"({"api": {"x\u0001": 1}})", &o, &error));
+  EXPECT_EQ(error, R"(config: api.x\u0001 is not a known key)");
+  EXPECT_FALSE(ParseConfig(R"({"gpio": {"estop": {"chip": "c", "line": 0, "l\ri": 1}}})", &o, &error));
+  EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+  EXPECT_EQ(error.find('\r'), std::string::npos) << error;
+}
+
 TEST(ConfigTest, RejectsBadValuesWithOneLineNamingTheKey) {
   const std::pair<const char*, const char*> cases[] = {
       {R"({"control": {"period_s": "fast"}})", "config: control.period_s must be a number"},

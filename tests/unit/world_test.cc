@@ -42,6 +42,10 @@ TEST(WorldTest, MalformedFilesNameTheField) {
       // impossible worlds are errors (a typo such as "objcts" gave an empty room).
       {R"({"room": [4,4], "start": [1,1,0], "objcts": [[2,2,3,3]]})", "\"objcts\" is not a known key"},
       {R"({"room": [4,4], "start": [1,1,0], "noise": {"slip": 0.1}})", "noise.slip is not a known key"},
+      // fuzz_world (2026-12-02): a key with an escaped newline came back as a
+      // two-line error; control characters are now written as escapes.
+      {R"({"u\nobj2,1,2<2]],bmeo&uE7Ea":0})", R"("u\nobj2,1,2<2]],bmeo&uE7Ea" is not a known key)"},
+      {R"({"room": [4,4], "start": [1,1,0], "noise": {"a\u0007\tb": 1}})", R"(noise.a\u0007\tb is not a known key)"},
       {R"({"room": [4,4], "start": [1,1,0], "objects": [[3,3,5,5]]})", "\"objects\"[0] lies outside the room"},
       {R"({"room": [4,4], "start": [2.5,2.5,0], "objects": [[2,2,3,3]]})", "\"start\" lies inside \"objects\"[0]"},
       {R"({"outline": [[0,0],[3,0],[3,2],[2,2],[2,3],[0,3]], "start": [1,1,0], "objects": [[2.2,2.2,2.8,2.8]]})",
