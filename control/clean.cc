@@ -360,48 +360,8 @@ Clean::Result Clean::Step(double t, const slam::Slam& slam, const RangeScan& raw
   switch (phase_) {
     case Phase::kDone:
       return {Status::kDone, {}};
-    case Phase::kPlanGoal: {
-      // One plan per period at most.
-      const Eigen::Vector2d goal = plan_.routes[cell_][point_];
-      if ((goal - Eigen::Vector2d(me.x, me.y)).norm() < 2 * options_.waypoint_tolerance_m) {
-        ++point_;
-        failures_ = 0;
-        phase_ = Phase::kSweep;
-        if (point_ >= plan_.routes[cell_].size()) NextCell(false);
-        return {};
-      }
-      // A route point lies at the cleaning clearance, a little beyond the
-      // planner's on its grid: if it cannot be planned to, try it moved along
-      // the route into the cell (at most three plans).
-      const auto& route = plan_.routes[cell_];
-      const Eigen::Vector2d toward =
-          point_ + 1 < route.size() ? route[point_ + 1] : (point_ > 0 ? route[point_ - 1] : goal);
-      const Eigen::Vector2d dir =
-          (toward - goal).norm() > 1e-6 ? Eigen::Vector2d((toward - goal).normalized()) : Eigen::Vector2d(0, 0);
-      // The last try: the point moved into the cell's free space, a margin
-      // inside (a point of the pushed-out edge pass lies outside it, and a
-      // contact remembered near a lane end can block the point itself).
-      std::vector<Eigen::Vector2d> tries;
-      for (double shift : {0.0, 0.06, 0.12}) {
-        if (shift > 0 && shift > (toward - goal).norm() - 0.02) break;
-        tries.push_back(goal + shift * dir);
-      }
-      {
-        const Eigen::Vector2d in = IntoCell(goal);
-        if ((in - goal).norm() > 1e-6) tries.push_back(in);
-      }
-      for (size_t k = 0; k < tries.size() && k < 3; ++k) {
-        // At most three plans: the last is the one moved into the cell, if any.
-        const Eigen::Vector2d& p = k == 2 ? tries.back() : tries[k];
-        if (go_to_.TryGoal(RotateVector(p, -rot), 0, false, slam, bumps)) {
-          go_to_.Begin(t);
-          phase_ = Phase::kTransit;
-          return {};
-        }
-      }
-      SkipPoint();
-      return {};
-    }
+    case Phase::kPlanGoal:
+      return StepPlanGoal(t, me, rot, slam, bumps);
     case Phase::kTransit: {
       const GoTo::Result r = go_to_.Step(t, slam, raw_scan, bumpers, bumps, follower);
       if (r.status == GoTo::Status::kDriving) return {Status::kCleaning, r.twist};
@@ -418,9 +378,64 @@ Clean::Result Clean::Step(double t, const slam::Slam& slam, const RangeScan& raw
     case Phase::kSweep:
       break;
   }
+  return StepSweep(me, slam, raw_scan, bumpers, bumps);
+}
+
+// The route point to go to next: reached already, or planned to (the point
+// itself, moved along the route into the cell, or into the cell's free space:
+// at most three plans), or given up.
+Clean::Result Clean::StepPlanGoal(double t, const Pose2& me, double rot, const slam::Slam& slam,
+                                  const BumpMemory& bumps) {
+  // One plan per period at most.
+  const Eigen::Vector2d goal = plan_.routes[cell_][point_];
+  if ((goal - Eigen::Vector2d(me.x, me.y)).norm() < 2 * options_.waypoint_tolerance_m) {
+    ++point_;
+    failures_ = 0;
+    phase_ = Phase::kSweep;
+    if (point_ >= plan_.routes[cell_].size()) NextCell(false);
+    return {};
+  }
+  const std::vector<Eigen::Vector2d> tries = GoalTries(goal);
+  for (size_t k = 0; k < tries.size() && k < 3; ++k) {
+    // At most three plans: the last is the one moved into the cell, if any.
+    const Eigen::Vector2d& p = k == 2 ? tries.back() : tries[k];
+    if (go_to_.TryGoal(RotateVector(p, -rot), 0, false, slam, bumps)) {
+      go_to_.Begin(t);
+      phase_ = Phase::kTransit;
+      return {};
+    }
+  }
+  SkipPoint();
+  return {};
+}
+
+std::vector<Eigen::Vector2d> Clean::GoalTries(const Eigen::Vector2d& goal) const {
+  // A route point lies at the cleaning clearance, a little beyond the
+  // planner's on its grid: if it cannot be planned to, try it moved along
+  // the route into the cell.
+  const auto& route = plan_.routes[cell_];
+  const Eigen::Vector2d toward =
+      point_ + 1 < route.size() ? route[point_ + 1] : (point_ > 0 ? route[point_ - 1] : goal);
+  const Eigen::Vector2d dir =
+      (toward - goal).norm() > 1e-6 ? Eigen::Vector2d((toward - goal).normalized()) : Eigen::Vector2d(0, 0);
+  std::vector<Eigen::Vector2d> tries;
+  for (double shift : {0.0, 0.06, 0.12}) {
+    if (shift > 0 && shift > (toward - goal).norm() - 0.02) break;
+    tries.push_back(goal + shift * dir);
+  }
+  // The last try: the point moved into the cell's free space, a margin
+  // inside (a point of the pushed-out edge pass lies outside it, and a
+  // contact remembered near a lane end can block the point itself).
+  const Eigen::Vector2d in = IntoCell(goal);
+  if ((in - goal).norm() > 1e-6) tries.push_back(in);
+  return tries;
+}
+
+// Driving along the lane: a contact or an obstacle ahead turns it into a plan
+// to the lane's next point (the go-to escapes first).
+Clean::Result Clean::StepSweep(const Pose2& me, const slam::Slam& slam, const RangeScan& raw_scan, uint8_t bumpers,
+                               const BumpMemory& bumps) {
   if (bumpers != 0) {
-    // A contact on the lane: plan round it (the go-to escapes first) to the
-    // lane's next point.
     phase_ = Phase::kPlanGoal;
     return {};
   }

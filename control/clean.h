@@ -135,6 +135,11 @@ class Clean {
   // The share of the current cell's area that a length of its route sweeps.
   double AreaShare(double length_m) const;
   Twist Follow(const Pose2& me, const RangeScan& scan, bool* blocked, bool* passed);
+  // Step's phases: planning to the next route point, and sweeping a lane.
+  Result StepPlanGoal(double t, const Pose2& me, double rot, const slam::Slam& slam, const BumpMemory& bumps);
+  std::vector<Eigen::Vector2d> GoalTries(const Eigen::Vector2d& goal) const;  // at most four points
+  Result StepSweep(const Pose2& me, const slam::Slam& slam, const RangeScan& raw_scan, uint8_t bumpers,
+                   const BumpMemory& bumps);
 
   CleaningOptions options_;
   double radius_m_;
