@@ -3,8 +3,6 @@
 // place that calls RobotCore::Status for the API.
 #include "daemon/irslamd.h"
 
-#include <algorithm>
-
 namespace irslam {
 namespace {
 
@@ -69,7 +67,7 @@ nlohmann::json Daemon::StatusJson() {
                  {"work", TickProfileJson(profile_)},
                  {"loop_stalls", core_->loop_stalls()},
                  {"scheduling", scheduling_.Describe(settings_.realtime_priority)},
-                 {"api_scheduling", api_scheduling_.Describe(std::max(settings_.realtime_priority - 1, 0))}};
+                 {"api_scheduling", api_scheduling_.Describe(ApiThreadPriority(settings_.realtime_priority))}};
   const auto& ps = core_->planner_stats();
   s["period"]["planner"] = {{"plans", ps.plans},       {"searches", ps.searches},
                             {"failed", ps.failed},     {"known_unreachable", ps.known_unreachable},

@@ -194,7 +194,7 @@ int Daemon::Run() {
 
 void Daemon::ApplyScheduling(bool log_change) {
   const int loop = settings_.realtime_priority;
-  const int api = loop > 1 ? loop - 1 : 0;
+  const int api = ApiThreadPriority(loop);
   const std::string before = scheduling_.Describe(loop) + api_scheduling_.Describe(api);
   scheduling_ = SetLoopScheduling(loop);
   pthread_t api_thread;

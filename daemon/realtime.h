@@ -40,6 +40,9 @@ struct ThreadScheduling {
 // without real time never makes the system call a unit may filter).
 ThreadScheduling SetThreadScheduling(pthread_t thread, int priority);
 
+// The API thread's priority for a loop priority: one below it (0: normal).
+inline int ApiThreadPriority(int loop_priority) { return loop_priority > 1 ? loop_priority - 1 : 0; }
+
 // The calling thread's (the control loop calls it for itself).
 inline ThreadScheduling SetLoopScheduling(int priority) { return SetThreadScheduling(pthread_self(), priority); }
 
