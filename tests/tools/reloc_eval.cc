@@ -14,12 +14,6 @@ namespace {
 
 constexpr double kDeg = 180.0 / M_PI;
 
-std::vector<TimedPose> Poses(const nlohmann::json& arr) {
-  std::vector<TimedPose> out;
-  for (const auto& p : arr) out.push_back({p[0], {p[1], p[2], p[3]}});
-  return out;
-}
-
 std::string F(double v, int prec = 1) {
   char b[32];
   std::snprintf(b, sizeof b, "%.*f", prec, v);
@@ -115,6 +109,12 @@ RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options,
 }
 
 }  // namespace
+
+std::vector<TimedPose> Poses(const nlohmann::json& arr) {
+  std::vector<TimedPose> out;
+  for (const auto& p : arr) out.push_back({p[0], {p[1], p[2], p[3]}});
+  return out;
+}
 
 Pose2 FitRigid(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to,
                double* rms_m) {

@@ -18,10 +18,15 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "robot/robot_core.h"
 #include "sim/world.h"
 
 namespace irslam::metrics {
+
+// A truth file's trajectory ([[t, x, y, theta], ...]) as poses.
+std::vector<TimedPose> Poses(const nlohmann::json& arr);
 
 // The rigid transform (rotation theta about the origin, then the shift x, y)
 // that maps `from` onto `to` with the least sum of squared distances (2-D

@@ -18,12 +18,6 @@ Pose2 Inverse(const Pose2& p) {
   return {-(c * p.x + s * p.y), s * p.x - c * p.y, -p.theta};
 }
 
-std::vector<TimedPose> Poses(const nlohmann::json& arr) {
-  std::vector<TimedPose> v;
-  for (const auto& p : arr) v.push_back({p[0], {p[1], p[2], p[3]}});
-  return v;
-}
-
 // One run from start in the saved map; the last moment before the commit with
 // >= 2 hypotheses.
 HypothesisSnapshot RunOne(const sim::World& base, const robot::CoreOptions& options,
