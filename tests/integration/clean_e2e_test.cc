@@ -46,6 +46,18 @@ std::optional<nlohmann::json> ReadJson(const std::string& path) {
   return ParseJsonText(testing::ReadFile(path), &error);
 }
 
+// The saved map's cleaning block, or null while there is no file or the file
+// has none (a save before cleaning began). The file is read as it is on disk,
+// so keys are checked: operator[] on a const json with a missing key is
+// undefined behaviour (it crashed this test once in CI).
+nlohmann::json SavedCleaning(const std::string& path) {
+  const auto file = ReadJson(path);
+  if (!file || !file->is_object() || !file->contains("map")) return nullptr;
+  const auto& map = file->at("map");
+  if (!map.is_object() || !map.contains("cleaning") || !map.at("cleaning").is_object()) return nullptr;
+  return map.at("cleaning");
+}
+
 int CellsDone(const nlohmann::json& cleaning) {
   int n = 0;
   for (const auto& c : cleaning.value("cells", nlohmann::json::array())) n += c.value("done", false);
@@ -208,8 +220,8 @@ TEST_F(CleanE2eTest, KillNineDuringCleaningKeepsTheSavedProgressIntact) {
     ASSERT_TRUE(s);
     ASSERT_NE((*s)["state"], "fault") << s->dump();
     ASSERT_NE((*s)["state"], "done") << "cleaning ended before two cells were saved";
-    if (const auto file = ReadJson(MapFile()); file && (*file)["map"]["cleaning"].is_object()) {
-      saved_cleaning = (*file)["map"]["cleaning"];
+    if (auto cl = SavedCleaning(MapFile()); !cl.is_null()) {
+      saved_cleaning = std::move(cl);
       saved_done = CellsDone(saved_cleaning);
     }
     Sleep(0.2);
@@ -260,13 +272,13 @@ TEST_F(CleanE2eTest, StopAndStartResumeTheRemainingCellsAndSoDoesARestartAfterKi
     nlohmann::json saved;
     const auto end = Clock::now() + std::chrono::duration<double>(WallS(wall_s_at_10x));
     while (Clock::now() < end) {
-      const auto s = Status();
+      auto s = Status();  // not const: operator[] on a const json with a missing key is undefined
       if (!s) break;
       EXPECT_NE((*s)["state"], "fault") << s->dump();
       EXPECT_NE((*s)["state"], "done") << "cleaning ended before " << cells << " cells were saved";
       if ((*s)["state"] == "fault" || (*s)["state"] == "done") break;
-      if (const auto file = ReadJson(MapFile()); file && (*file)["map"]["cleaning"].is_object()) {
-        saved = (*file)["map"]["cleaning"];
+      if (auto cl = SavedCleaning(MapFile()); !cl.is_null()) {
+        saved = std::move(cl);
         if (CellsDone(saved) >= cells) return saved;
       }
       Sleep(0.2);
@@ -309,7 +321,7 @@ TEST_F(CleanE2eTest, StopAndStartResumeTheRemainingCellsAndSoDoesARestartAfterKi
   nlohmann::json last;
   const auto end = Clock::now() + std::chrono::duration<double>(WallS(150));
   while (Clock::now() < end) {
-    const auto st = Status();
+    auto st = Status();
     ASSERT_TRUE(st);
     last = *st;
     const std::string state = last["state"];
