@@ -65,6 +65,36 @@ std::vector<Eigen::Vector2d> Survey::MiddlePoints(const Box& room) const {
   return out;
 }
 
+namespace {
+
+// The survey's count grid: the cell centres exactly as the ranking always
+// computed them (x and y stepped by repeated addition from the room's corner),
+// and the index window round a point that holds every centre within `range`
+// of it (two cells of slack on each side: the window only limits the loops;
+// the test itself is the same distance as ever).
+struct CountGrid {
+  std::vector<double> xs, ys;
+  static std::vector<double> Centres(double lo, double hi, double cell) {
+    std::vector<double> out;
+    for (double v = lo + 0.5 * cell; v < hi; v += cell) out.push_back(v);
+    return out;
+  }
+  static std::pair<int, int> Window(const std::vector<double>& c, double centre, double range, double cell) {
+    if (c.empty()) return {0, -1};
+    const int lo = static_cast<int>(std::floor((centre - range - c.front()) / cell)) - 2;
+    const int hi = static_cast<int>(std::ceil((centre + range - c.front()) / cell)) + 2;
+    return {std::max(0, lo), std::min(static_cast<int>(c.size()) - 1, hi)};
+  }
+};
+
+}  // namespace
+
+// The ranking is bounded by the room's cells times a window of (2 range / cell
+// + 5)^2 cells: each trajectory point marks the cells it saw, and each candidate
+// counts the unseen cells in its window (issue 15: it used to compare every
+// cell with every trajectory point and every candidate with every unseen cell,
+// 26 ms in a 16 x 12 m room). The same points in the same order as before: the
+// same centres, the same distance tests, the same candidate order.
 std::vector<Eigen::Vector2d> Survey::RankedPoints(const Box& r, const std::vector<TimedPose>& traj,
                                                   const std::vector<ObjectModel>& objects) const {
   const auto& o = options_;
@@ -72,12 +102,16 @@ std::vector<Eigen::Vector2d> Survey::RankedPoints(const Box& r, const std::vecto
   const double range = o.survey_range_m;
   const double margin = o.survey_object_margin_m, wall = o.survey_wall_margin_m;
   const size_t stride = static_cast<size_t>(o.survey_trajectory_stride);
+  CountGrid grid{CountGrid::Centres(r.xmin, r.xmax, cell), CountGrid::Centres(r.ymin, r.ymax, cell)};
+  const int nx = static_cast<int>(grid.xs.size()), ny = static_cast<int>(grid.ys.size());
+  const auto at = [ny](int i, int j) { return static_cast<size_t>(i) * static_cast<size_t>(ny) + static_cast<size_t>(j); };
   // Cells of the room (map frame) not yet seen: farther than the range from
   // every trajectory point, and not inside a known object.
-  std::vector<Eigen::Vector2d> unseen, candidates;
-  for (double x = r.xmin + 0.5 * cell; x < r.xmax; x += cell) {
-    for (double y = r.ymin + 0.5 * cell; y < r.ymax; y += cell) {
-      const Eigen::Vector2d c(x, y);
+  std::vector<char> unseen(static_cast<size_t>(nx) * static_cast<size_t>(ny), 1);
+  std::vector<Eigen::Vector2d> candidates;
+  for (int i = 0; i < nx; ++i) {
+    for (int j = 0; j < ny; ++j) {
+      const double x = grid.xs[static_cast<size_t>(i)], y = grid.ys[static_cast<size_t>(j)];
       bool in_object = false;
       for (const auto& ob : objects) {
         in_object = in_object || (x > ob.box.xmin - margin && x < ob.box.xmax + margin &&
@@ -85,25 +119,48 @@ std::vector<Eigen::Vector2d> Survey::RankedPoints(const Box& r, const std::vecto
       }
       const bool clear_of_walls =
           x - r.xmin > wall && r.xmax - x > wall && y - r.ymin > wall && r.ymax - y > wall;
-      if (!in_object && clear_of_walls) candidates.push_back(c);
-      bool seen = in_object;
-      for (size_t k = 0; k < traj.size() && !seen; k += stride) {
-        seen = std::hypot(traj[k].pose.x - x, traj[k].pose.y - y) < range;
+      if (!in_object && clear_of_walls) candidates.emplace_back(x, y);
+      if (in_object) unseen[at(i, j)] = 0;
+    }
+  }
+  const double range2 = range * range * (1 + 1e-9);
+  for (size_t k = 0; k < traj.size(); k += stride) {
+    const double px = traj[k].pose.x, py = traj[k].pose.y;
+    const auto [i0, i1] = CountGrid::Window(grid.xs, px, range, cell);
+    const auto [j0, j1] = CountGrid::Window(grid.ys, py, range, cell);
+    for (int i = i0; i <= i1; ++i) {
+      for (int j = j0; j <= j1; ++j) {
+        char& u = unseen[at(i, j)];
+        const double dx = px - grid.xs[static_cast<size_t>(i)], dy = py - grid.ys[static_cast<size_t>(j)];
+        // (Clearly out of range by the square: the same answer without the hypot.)
+        if (u && dx * dx + dy * dy <= range2 && std::hypot(dx, dy) < range) u = 0;
       }
-      if (!seen) unseen.push_back(c);
     }
   }
   for (const auto& sp : points_) {  // and what earlier surveys looked at
-    unseen.erase(std::remove_if(unseen.begin(), unseen.end(),
-                                [&](const Eigen::Vector2d& c) { return (c - sp).norm() < range; }),
-                 unseen.end());
+    const auto [i0, i1] = CountGrid::Window(grid.xs, sp.x(), range, cell);
+    const auto [j0, j1] = CountGrid::Window(grid.ys, sp.y(), range, cell);
+    for (int i = i0; i <= i1; ++i) {
+      for (int j = j0; j <= j1; ++j) {
+        const Eigen::Vector2d c(grid.xs[static_cast<size_t>(i)], grid.ys[static_cast<size_t>(j)]);
+        if ((c - sp).norm() < range) unseen[at(i, j)] = 0;
+      }
+    }
   }
   // The points that would see most of the unseen room (ties: nearer the middle).
   const Eigen::Vector2d middle = Middle(r);
   std::vector<std::pair<double, Eigen::Vector2d>> ranked;
   for (const auto& c : candidates) {
     int n = 0;
-    for (const auto& u : unseen) n += (u - c).norm() < range;
+    const auto [i0, i1] = CountGrid::Window(grid.xs, c.x(), range, cell);
+    const auto [j0, j1] = CountGrid::Window(grid.ys, c.y(), range, cell);
+    for (int i = i0; i <= i1; ++i) {
+      for (int j = j0; j <= j1; ++j) {
+        if (!unseen[at(i, j)]) continue;
+        const Eigen::Vector2d u(grid.xs[static_cast<size_t>(i)], grid.ys[static_cast<size_t>(j)]);
+        n += (u - c).norm() < range;
+      }
+    }
     if (n * cell * cell >= o.survey_min_unseen_m2)
       ranked.emplace_back(n - 0.01 * (c - middle).norm(), c);
   }
