@@ -399,7 +399,7 @@ Clean::Result Clean::StepPlanGoal(double t, const Pose2& me, double rot, const s
   for (size_t k = 0; k < tries.size() && k < 3; ++k) {
     // At most three plans: the last is the one moved into the cell, if any.
     const Eigen::Vector2d& p = k == 2 ? tries.back() : tries[k];
-    if (go_to_.TryGoal(RotateVector(p, -rot), 0, false, slam, bumps)) {
+    if (go_to_.TryGoal(t, RotateVector(p, -rot), 0, false, slam, bumps)) {
       go_to_.Begin(t);
       phase_ = Phase::kTransit;
       return {};

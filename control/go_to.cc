@@ -1,6 +1,7 @@
 #include "control/go_to.h"
 
 #include <algorithm>
+#include <limits>
 
 namespace irslam::control {
 
@@ -24,6 +25,8 @@ options::Table<GoToOptions> GoToKeys() {
        "(0: every period)"},
       {"replan_backoff_after", &O::replan_backoff_after, 1, 1000, "",
        "... once this many plans in a row failed (before, every period)"},
+      {"plan_pops_per_period", &O::plan_pops_per_period, 0, 100000000, "",
+       "A* queue pops per control period at most; a longer search goes on in the next periods (0: no bound)"},
       {"front_stop_m", &O::front_stop_m, 0.1, 2, "m",
        "something this close ahead: stop and plan around it"},
       {"go_to_timeout_s", &O::go_to_timeout_s, 1, 3600, "s",
@@ -76,12 +79,15 @@ options::Table<GoToOptions> GoToKeys() {
   return kKeys;
 }
 
-bool GoTo::TryGoal(const Eigen::Vector2d& goal, double heading, bool align, const slam::Slam& slam,
-                   const BumpMemory& bumps) {
+bool GoTo::TryGoal(double t, const Eigen::Vector2d& goal, double heading, bool align,
+                   const slam::Slam& slam, const BumpMemory& bumps) {
   p1_ = goal;
   p1_heading_ = heading;
   align_ = align;
-  return Replan(slam, RangeScan{}, bumps);
+  const PathPlanner::Progress p = Replan(t, slam, RangeScan{}, bumps);
+  // Still searching: no path yet (not the last goal's either): Step waits for it.
+  if (p == PathPlanner::Progress::kRunning) path_.clear();
+  return p != PathPlanner::Progress::kFailed;
 }
 
 void GoTo::Begin(double t) {
@@ -96,18 +102,30 @@ void GoTo::Begin(double t) {
   retry_at_ = -1e9;
 }
 
-std::optional<std::vector<Eigen::Vector2d>> GoTo::Plan(const std::vector<Obstacle>& obstacles,
-                                                        const Eigen::Vector2d& start,
-                                                        const PlannerOptions& po) {
-  const int64_t t0 = clock_ ? clock_() : 0;
-  auto path = planner_.Plan(obstacles, start, p1_, po);
-  if (clock_) planning_ns_ += clock_() - t0;
-  return path;
+int64_t* GoTo::Budget(double t) {
+  if (t != budget_t_) {
+    budget_t_ = t;
+    budget_left_ = options_.plan_pops_per_period > 0 ? options_.plan_pops_per_period
+                                                     : std::numeric_limits<int64_t>::max();
+  }
+  return &budget_left_;
 }
 
-bool GoTo::Replan(const slam::Slam& slam, const RangeScan& scan, const BumpMemory& bumps) {
+PathPlanner::Progress GoTo::ContinuePlan(double t) {
+  const int64_t t0 = clock_ ? clock_() : 0;
+  int64_t* left = Budget(t);
+  int64_t pops = 0;
+  const PathPlanner::Progress p = planner_.Continue(*left, &pops);
+  *left -= pops;
+  if (clock_) planning_ns_ += clock_() - t0;
+  return Ended(p);
+}
+
+PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const RangeScan& scan,
+                                   const BumpMemory& bumps) {
   const auto& o = options_;
-  std::vector<Obstacle> obstacles;
+  std::vector<Obstacle>& obstacles = plan_obstacles_;
+  obstacles.clear();
   // Mapped sides are seen shorter than they are (their ends are passed on
   // corner arcs): plan around them extended at each end.
   for (const auto& l : slam.lines()) {
@@ -128,22 +146,46 @@ bool GoTo::Replan(const slam::Slam& slam, const RangeScan& scan, const BumpMemor
   PlannerOptions po = o.planner;
   po.inflation_m = radius_m_ + o.clearance_m;
   po.hard_m = radius_m_ + o.hard_clearance_m;
-  auto path = Plan(obstacles, {me.x, me.y}, po);
-  if (!path) return false;
+  plan_from_ = {me.x, me.y};
+  const int64_t t0 = clock_ ? clock_() : 0;
+  const PathPlanner::Progress p = planner_.Start(obstacles, plan_from_, p1_, po);
+  if (clock_) planning_ns_ += clock_() - t0;
+  return p == PathPlanner::Progress::kRunning ? ContinuePlan(t) : Ended(p);
+}
+
+PathPlanner::Progress GoTo::Ended(PathPlanner::Progress p) {
+  if (p != PathPlanner::Progress::kFound) return p;
+  const auto& o = options_;
+  const std::vector<Eigen::Vector2d>& path = planner_.path();
   // Keep the path being followed while it is still clear and not much longer
   // than the new one: near a tight spot two ways round are often about as long,
   // and switching between them at every replan left the robot turning on the
   // spot from one to the other.
   if (!path_.empty() && (path_.back() - p1_).norm() < 1e-6) {
     std::vector<Eigen::Vector2d> rest = path_;
-    rest.insert(rest.begin(), Eigen::Vector2d(me.x, me.y));
-    if (PathLength(rest) < o.keep_path_ratio * PathLength(*path) + o.keep_path_slack_m &&
-        PathClear(obstacles, rest, po.hard_m, o.keep_path_skip_m)) {
-      return true;
+    rest.insert(rest.begin(), plan_from_);
+    if (PathLength(rest) < o.keep_path_ratio * PathLength(path) + o.keep_path_slack_m &&
+        PathClear(plan_obstacles_, rest, radius_m_ + o.hard_clearance_m, o.keep_path_skip_m)) {
+      return p;
     }
   }
-  path_ = *path;
-  return true;
+  path_ = path;
+  return p;
+}
+
+void GoTo::Planned(double t, bool ok) {
+  const auto& o = options_;
+  last_plan_ok_ = ok;
+  if (ok) {
+    plan_failures_ = 0;
+    retry_at_ = -1e9;
+    return;
+  }
+  ++plan_failures_;
+  const int over = plan_failures_ - std::max(1, o.replan_backoff_after);
+  retry_at_ = o.replan_backoff_s <= 0 || over < 0
+                  ? -1e9
+                  : t + std::min(o.replan_period_s, o.replan_backoff_s * std::ldexp(1.0, std::min(over, 20)));
 }
 
 void GoTo::BeginEscape(double t, const slam::Slam& slam, double contact_bearing) {
@@ -264,19 +306,22 @@ GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_s
   const bool blocked = front && *front < o.front_stop_m;
   // Blocked: replan at once, but after a failed plan only when the back-off
   // allows (a failed search floods the whole grid; every period was too much).
-  if ((blocked && t >= retry_at_) || t - last_plan_ > o.replan_period_s) {
+  // A search longer than a period's budget goes on in the next periods: the
+  // robot holds still meanwhile if blocked or without a path yet, else it
+  // follows the path it has.
+  std::optional<PathPlanner::Progress> plan;
+  if (planner_.running()) {
+    plan = ContinuePlan(t);
+  } else if ((blocked && t >= retry_at_) || t - last_plan_ > o.replan_period_s) {
     last_plan_ = t;
-    last_plan_ok_ = Replan(slam, scan, bumps);
-    if (last_plan_ok_) {
-      plan_failures_ = 0;
-      retry_at_ = -1e9;
-    } else {
-      ++plan_failures_;
-      const int over = plan_failures_ - std::max(1, o.replan_backoff_after);
-      retry_at_ = o.replan_backoff_s <= 0 || over < 0
-                      ? -1e9
-                      : t + std::min(o.replan_period_s, o.replan_backoff_s * std::ldexp(1.0, std::min(over, 20)));
-    }
+    plan = Replan(t, slam, scan, bumps);
+  }
+  if (plan == PathPlanner::Progress::kRunning) {
+    return blocked || path_.empty() ? Drive({0, 0}) : Drive(Pursue(me, front));
+  }
+  if (plan) {
+    if (*plan == PathPlanner::Progress::kFailed && path_.empty()) return GiveUp("no way found");
+    Planned(t, *plan == PathPlanner::Progress::kFound);
     if (!last_plan_ok_ && blocked) return Drive({0, o.k_heading * o.look_around_factor});  // blocked: look around
   } else if (blocked && !last_plan_ok_) {
     return Drive({0, o.k_heading * o.look_around_factor});  // blocked, backing off: look around

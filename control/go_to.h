@@ -38,6 +38,11 @@ struct GoToOptions {
   // worlds and cost one `done` of 30 realistic ones (docs/benchmarks.md).
   double replan_backoff_s = 0;
   int replan_backoff_after = 10;
+  // Planning in one control period runs at most this many A* queue pops (~0.1
+  // us each here); a search that needs more goes on in the next periods, the
+  // robot holding still (or, replanning, following the path it has) meanwhile.
+  // 0: no bound (every search ends in the period it starts).
+  int plan_pops_per_period = 0;
   double front_stop_m = 0.32;   // unmapped obstacle ahead: stop, replan
   double go_to_timeout_s = 90;  // give the goal up if not reached by then
   double go_to_stuck_s = 25;    // ... or if the robot got no go_to_progress_m further for this long
@@ -92,11 +97,15 @@ class GoTo {
        const std::array<SensorMount, kNumIrSensors>& mounts)
       : options_(options), radius_m_(geometry.radius_m), mounts_(mounts) {}
 
-  // Sets the goal (internal frame) and plans a path to it from the robot's pose;
-  // false if none was found. align: on arrival turn to `heading` first; without,
-  // once reached the goal stays reached (the caller acts there).
-  bool TryGoal(const Eigen::Vector2d& goal, double heading, bool align, const slam::Slam& slam,
-               const BumpMemory& bumps);
+  // Sets the goal (internal frame) and plans a path to it from the robot's pose
+  // (t: the control period's time, whose planning budget it spends); false if
+  // none was found. A search that needs more than the period's budget is
+  // accepted and goes on in Step, the robot holding still; if it then finds no
+  // path, Step gives the goal up ("no way found"). align: on arrival turn to
+  // `heading` first; without, once reached the goal stays reached (the caller
+  // acts there).
+  bool TryGoal(double t, const Eigen::Vector2d& goal, double heading, bool align,
+               const slam::Slam& slam, const BumpMemory& bumps);
   // Starts driving to the goal set by the last successful TryGoal.
   void Begin(double t);
   // One control step; bumpers: the bumper bits now.
@@ -114,10 +123,18 @@ class GoTo {
  private:
   Result GiveUp(std::string why) { return {Status::kGiveUp, {}, std::move(why)}; }
   Result Drive(Twist tw) { return {Status::kDriving, tw, {}}; }
-  bool Replan(const slam::Slam& slam, const RangeScan& scan, const BumpMemory& bumps);
-  std::optional<std::vector<Eigen::Vector2d>> Plan(const std::vector<Obstacle>& obstacles,
-                                                   const Eigen::Vector2d& start,
-                                                   const PlannerOptions& po);
+  // Starts a plan from the robot's pose round the mapped lines, the bumps and
+  // what the scan sees, and runs it within the period's budget.
+  PathPlanner::Progress Replan(double t, const slam::Slam& slam, const RangeScan& scan,
+                               const BumpMemory& bumps);
+  // Runs the plan in progress within the period's budget.
+  PathPlanner::Progress ContinuePlan(double t);
+  // The period's budget of pops left (a new period: the whole budget).
+  int64_t* Budget(double t);
+  // A plan ended: found (the path taken, or the one followed kept) or not.
+  PathPlanner::Progress Ended(PathPlanner::Progress p);
+  // After a replan ended in Step: the failure count and the back-off.
+  void Planned(double t, bool ok);
   // The nearest thing ahead (mapped or not, or a bump point) from the scan.
   std::optional<double> Front(const RangeScan& scan, const WallFollower& follower) const;
   void BeginEscape(double t, const slam::Slam& slam, double contact_bearing);
@@ -141,6 +158,10 @@ class GoTo {
   int plan_failures_ = 0;
   double retry_at_ = -1e9;
   PathPlanner planner_;  // its grids are kept between plans
+  std::vector<Obstacle> plan_obstacles_;                 // what the plan in progress avoids
+  Eigen::Vector2d plan_from_ = Eigen::Vector2d::Zero();  // ... and where the robot was
+  double budget_t_ = -1e18;                              // the period budget_left_ is for
+  int64_t budget_left_ = 0;
   WorkClock clock_;
   int64_t planning_ns_ = 0;
   double backoff_until_ = -1e9;

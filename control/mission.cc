@@ -487,7 +487,7 @@ WheelCommand Mission::GoToObject(double t, const slam::Slam& slam, const Environ
   const double rot = slam.map_rotation();
   for (const auto& s :
        ContourStarts(*target, slam.map_lines(), slam.map_trajectory(), me, follow_distance_m_)) {
-    if (go_to_.TryGoal(RotateVector(s.p, -rot), NormalizeAngle(s.heading - rot), true, slam,
+    if (go_to_.TryGoal(t, RotateVector(s.p, -rot), NormalizeAngle(s.heading - rot), true, slam,
                        bumps_)) {
       Enter(MissionState::kGoToP1, t, "going to object " + std::to_string(target_));
       go_to_.Begin(t);
@@ -503,7 +503,7 @@ bool Mission::StartSurvey(double t, const slam::Slam& slam, const EnvironmentMod
   const Box& room = *m.room.box;
   const double rot = slam.map_rotation();
   const auto go = [&](const Eigen::Vector2d& p) {
-    if (!go_to_.TryGoal(RotateVector(p, -rot), slam.pose().theta, false, slam, bumps_))
+    if (!go_to_.TryGoal(t, RotateVector(p, -rot), slam.pose().theta, false, slam, bumps_))
       return false;
     survey_.Accept(p);
     target_ = 0;
@@ -629,7 +629,7 @@ WheelCommand Mission::StepReturnHome(double t, double dt, const slam::Slam& slam
     // One plan per period, and after a failure not for a while.
     if (t < home_retry_t_) return Halt();
     home_retry_t_ = t + 2.0;
-    if (home_go_to_.TryGoal({home_.x, home_.y}, home_.theta, true, slam, bumps_)) {
+    if (home_go_to_.TryGoal(t, {home_.x, home_.y}, home_.theta, true, slam, bumps_)) {
       home_go_to_.Begin(t);
       home_planned_ = true;
     } else if (++home_attempts_ >= options_.cleaning.home_attempts) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <functional>
+#include <limits>
 
 namespace irslam::control {
 namespace {
@@ -88,28 +89,27 @@ double PathPlanner::H(int dx, int dy) {
   return h;
 }
 
-// A* (8-connected) from cell (sx, sy) to (gx, gy): each cell's predecessor in
-// from_ (-1: none), its cost in g_. The same search as ever; the open list is a
-// binary heap of (f, cell) ordered like std::priority_queue's (std::push_heap /
-// pop_heap with std::greater), so cells come off it in the same order.
-void PathPlanner::Search(int sx, int sy, int gx, int gy, const PlannerOptions& o) {
+// A* (8-connected) from cell s_ = (sx_, sy_) to goal_i_ = (gx_, gy_): each
+// cell's predecessor in from_ (-1: none), its cost in g_. The same search as
+// ever; the open list is a binary heap of (f, cell) ordered like
+// std::priority_queue's (std::push_heap / pop_heap with std::greater), so cells
+// come off it in the same order. Runs at most max_pops pops; true once the
+// search has ended (the goal popped or the queue empty).
+bool PathPlanner::SearchSome(int64_t max_pops, int64_t* pops) {
+  const PlannerOptions& o = o_;
   const int nx = geo_.nx, ny = geo_.ny;
-  const size_t n = static_cast<size_t>(nx) * static_cast<size_t>(ny);
-  g_.assign(n, 1e18);
-  from_.assign(n, -1);
-  open_.clear();
+  const int sx = sx_, sy = sy_, gx = gx_, gy = gy_, goal_i = goal_i_;
   const auto cmp = std::greater<>();
-  const int s = sy * nx + sx, goal_i = gy * nx + gx;
   const auto h = [&](int i) { return H(i % nx - gx, i / nx - gy); };
-  g_[static_cast<size_t>(s)] = 0;
-  open_.push_back({h(s), s});
   const int dx[8] = {1, -1, 0, 0, 1, 1, -1, -1}, dy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
-  while (!open_.empty()) {
+  for (int64_t popped = 0; !open_.empty(); ++popped) {
+    if (popped >= max_pops) return false;
     std::pop_heap(open_.begin(), open_.end(), cmp);
     const auto [f, i] = open_.back();
     open_.pop_back();
     ++stats_.pops;
-    if (i == goal_i) break;
+    ++*pops;
+    if (i == goal_i) return true;
     if (f > g_[static_cast<size_t>(i)] + h(i) + 1e-9) continue;
     const int ix = i % nx, iy = i / nx;
     for (int k = 0; k < 8; ++k) {
@@ -133,12 +133,24 @@ void PathPlanner::Search(int sx, int sy, int gx, int gy, const PlannerOptions& o
       }
     }
   }
+  return true;
 }
 
 std::optional<std::vector<Eigen::Vector2d>> PathPlanner::Plan(
     const std::vector<Obstacle>& obstacles, const Eigen::Vector2d& start,
     const Eigen::Vector2d& goal, const PlannerOptions& o) {
+  int64_t pops = 0;
+  Progress p = Start(obstacles, start, goal, o);
+  if (p == Progress::kRunning) p = Continue(std::numeric_limits<int64_t>::max(), &pops);
+  if (p != Progress::kFound) return std::nullopt;
+  return path_;
+}
+
+PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
+                                         const Eigen::Vector2d& start, const Eigen::Vector2d& goal,
+                                         const PlannerOptions& o) {
   ++stats_.plans;
+  running_ = false;
   Eigen::Vector2d lo = start.cwiseMin(goal), hi = start.cwiseMax(goal);
   for (const auto& ob : obstacles) {
     lo = lo.cwiseMin(ob.a).cwiseMin(ob.b);
@@ -154,7 +166,7 @@ std::optional<std::vector<Eigen::Vector2d>> PathPlanner::Plan(
   const int nx = geo.nx, ny = geo.ny;
   if (static_cast<long>(nx) * ny > 4'000'000) {
     ++stats_.failed;
-    return std::nullopt;
+    return Progress::kFailed;
   }
   Grid grid;
   grid.lo = geo.lo;
@@ -180,7 +192,7 @@ std::optional<std::vector<Eigen::Vector2d>> PathPlanner::Plan(
   if (gx < 0 || gy < 0 || gx >= nx || gy >= ny ||
       clear_[static_cast<size_t>(gy * nx + gx)] < o.inflation_m) {
     ++stats_.failed;
-    return std::nullopt;
+    return Progress::kFailed;
   }
   const int s = sy * nx + sx, goal_i = gy * nx + gx;
   if (failed_valid_ && failed_start_ == s && failed_hard_m_ == o.hard_m &&
@@ -188,30 +200,52 @@ std::optional<std::vector<Eigen::Vector2d>> PathPlanner::Plan(
     // The last search from here visited every cell that can be reached: not this one.
     ++stats_.failed;
     ++stats_.known_unreachable;
-    return std::nullopt;
+    return Progress::kFailed;
   }
   ++stats_.searches;
-  Search(sx, sy, gx, gy, o);
-  failed_valid_ = false;
+  failed_valid_ = false;  // g_ is about to be overwritten
+  sx_ = sx, sy_ = sy, gx_ = gx, gy_ = gy, s_ = s, goal_i_ = goal_i;
+  o_ = o;
+  start_ = start;
+  goal_ = goal;
+  const size_t n = static_cast<size_t>(nx) * static_cast<size_t>(ny);
+  g_.assign(n, 1e18);
+  from_.assign(n, -1);
+  open_.clear();
+  g_[static_cast<size_t>(s)] = 0;
+  open_.push_back({H(sx - gx, sy - gy), s});
+  running_ = true;
+  return Progress::kRunning;
+}
+
+PathPlanner::Progress PathPlanner::Continue(int64_t max_pops, int64_t* pops) {
+  if (!running_) return Progress::kFailed;
+  if (!SearchSome(max_pops, pops)) return Progress::kRunning;
+  running_ = false;
+  return Finish();
+}
+
+PathPlanner::Progress PathPlanner::Finish() {
+  const int nx = geo_.nx, s = s_, goal_i = goal_i_;
   if (from_[static_cast<size_t>(goal_i)] < 0 && goal_i != s) {
     failed_valid_ = true;
     failed_start_ = s;
-    failed_hard_m_ = o.hard_m;
+    failed_hard_m_ = o_.hard_m;
     ++stats_.failed;
-    return std::nullopt;
+    return Progress::kFailed;
   }
   std::vector<Eigen::Vector2d> cells;
   for (int i = goal_i; i != -1; i = from_[static_cast<size_t>(i)])
-    cells.push_back(grid.Centre(i % nx, i / nx));
+    cells.push_back(Eigen::Vector2d(geo_.lo.x() + (i % nx) * geo_.res, geo_.lo.y() + (i / nx) * geo_.res));
   std::reverse(cells.begin(), cells.end());
   // Keep the corners only.
-  std::vector<Eigen::Vector2d> path = {start};
+  path_ = {start_};
   for (size_t i = 1; i + 1 < cells.size(); ++i) {
     const Eigen::Vector2d d0 = cells[i] - cells[i - 1], d1 = cells[i + 1] - cells[i];
-    if ((d0 - d1).norm() > 1e-9) path.push_back(cells[i]);
+    if ((d0 - d1).norm() > 1e-9) path_.push_back(cells[i]);
   }
-  path.push_back(goal);
-  return path;
+  path_.push_back(goal_);
+  return Progress::kFound;
 }
 
 std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>& obstacles,

@@ -50,13 +50,29 @@ std::optional<std::vector<Eigen::Vector2d>> PlanPath(const std::vector<Obstacle>
                                                      const Eigen::Vector2d& goal,
                                                      const PlannerOptions& options);
 
-// The same, keeping its buffers and caches between calls (one per go-to).
+// The same, keeping its buffers and caches between calls (one per go-to), and
+// able to run a search in pieces (issue 15): Start() prepares it (the grid and
+// the checks that answer at once), Continue() runs it for at most a number of
+// queue pops, so a caller can spread a search over control periods. A search
+// run in pieces finds exactly the path the one-shot Plan() finds.
 class PathPlanner {
  public:
+  enum class Progress { kRunning, kFound, kFailed };
+
   std::optional<std::vector<Eigen::Vector2d>> Plan(const std::vector<Obstacle>& obstacles,
                                                    const Eigen::Vector2d& start,
                                                    const Eigen::Vector2d& goal,
                                                    const PlannerOptions& options);
+  // Starts a search (abandoning any search still running); kFound or kFailed
+  // when it is answered without one (a goal off the grid or blocked, or known
+  // unreachable).
+  Progress Start(const std::vector<Obstacle>& obstacles, const Eigen::Vector2d& start,
+                 const Eigen::Vector2d& goal, const PlannerOptions& options);
+  // Runs the search started for at most max_pops pops (adds them to *pops).
+  Progress Continue(int64_t max_pops, int64_t* pops);
+  bool running() const { return running_; }
+  // The path found by the last search that ended kFound.
+  const std::vector<Eigen::Vector2d>& path() const { return path_; }
   struct Stats {
     uint64_t plans = 0;         // calls
     uint64_t searches = 0;      // A* searches run
@@ -76,7 +92,9 @@ class PathPlanner {
       return lo == o.lo && nx == o.nx && ny == o.ny && res == o.res;
     }
   };
-  void Search(int sx, int sy, int gx, int gy, const PlannerOptions& o);
+  // The search in progress: A* from cell s_ to goal_i_ with the options o_.
+  bool SearchSome(int64_t max_pops, int64_t* pops);  // true once it has ended
+  Progress Finish();
   double H(int dx, int dy);
 
   Geometry geo_;
@@ -94,6 +112,11 @@ class PathPlanner {
   int failed_start_ = -1;
   double failed_hard_m_ = 0;
   Stats stats_;
+  bool running_ = false;
+  int s_ = 0, goal_i_ = 0, sx_ = 0, sy_ = 0, gx_ = 0, gy_ = 0;
+  PlannerOptions o_;
+  Eigen::Vector2d start_ = Eigen::Vector2d::Zero(), goal_ = Eigen::Vector2d::Zero();
+  std::vector<Eigen::Vector2d> path_;
 };
 
 // Whether a path (from the robot's position) still keeps at least `clearance_m`

@@ -19,7 +19,7 @@ struct Rig {
 TEST(GoToTest, PlansAndDrivesStraightAtAGoalAhead) {
   Rig r;
   GoTo g({}, r.o.slam.geometry, r.o.slam.mounts);
-  ASSERT_TRUE(g.TryGoal({2, 0}, 0, true, r.slam, r.bumps));
+  ASSERT_TRUE(g.TryGoal(0, {2, 0}, 0, true, r.slam, r.bumps));
   ASSERT_FALSE(g.path().empty());
   EXPECT_NEAR((g.path().back() - Eigen::Vector2d(2, 0)).norm(), 0, 1e-9);
   g.Begin(0);
@@ -35,7 +35,7 @@ TEST(GoToTest, GivesUpAfterTheStuckTime) {
     GoToOptions o;
     o.go_to_stuck_s = stuck;
     GoTo g(o, r.o.slam.geometry, r.o.slam.mounts);
-    ASSERT_TRUE(g.TryGoal({2, 0}, 0, true, r.slam, r.bumps));
+    ASSERT_TRUE(g.TryGoal(0, {2, 0}, 0, true, r.slam, r.bumps));
     g.Begin(0);
     double gave_up = -1;
     std::string why;
@@ -56,7 +56,7 @@ TEST(GoToTest, TimesOutEvenWhileMoving) {
   GoToOptions o;
   o.go_to_timeout_s = 5;
   GoTo g(o, r.o.slam.geometry, r.o.slam.mounts);
-  ASSERT_TRUE(g.TryGoal({2, 0}, 0, true, r.slam, r.bumps));
+  ASSERT_TRUE(g.TryGoal(0, {2, 0}, 0, true, r.slam, r.bumps));
   g.Begin(10);
   EXPECT_EQ(g.Step(15, r.slam, RangeScan{}, 0, r.bumps, r.follower).status, GoTo::Status::kDriving);
   const GoTo::Result res = g.Step(15.5, r.slam, RangeScan{}, 0, r.bumps, r.follower);
@@ -69,7 +69,7 @@ TEST(GoToTest, EscapesAContactThenGivesUpWhenItKeepsHittingIt) {
   GoToOptions o;
   o.go_to_stuck_s = 1000;
   GoTo g(o, r.o.slam.geometry, r.o.slam.mounts);
-  ASSERT_TRUE(g.TryGoal({2, 0}, 0, true, r.slam, r.bumps));
+  ASSERT_TRUE(g.TryGoal(0, {2, 0}, 0, true, r.slam, r.bumps));
   g.Begin(0);
   // Left bumper: turn to face away from the contact (heading 0.6 + pi), at the
   // escape turn-rate limit.
@@ -91,11 +91,11 @@ TEST(GoToTest, EscapesAContactThenGivesUpWhenItKeepsHittingIt) {
 TEST(GoToTest, AGoalWithoutHeadingStaysReached) {
   Rig r;
   GoTo g({}, r.o.slam.geometry, r.o.slam.mounts);
-  ASSERT_TRUE(g.TryGoal({0.05, 0}, 0, false, r.slam, r.bumps));  // within goal_tolerance_m
+  ASSERT_TRUE(g.TryGoal(0, {0.05, 0}, 0, false, r.slam, r.bumps));  // within goal_tolerance_m
   g.Begin(0);
   EXPECT_EQ(g.Step(0, r.slam, RangeScan{}, 0, r.bumps, r.follower).status, GoTo::Status::kArrived);
   // With a heading to turn to (pi/2 away): turn at the align limit first.
-  ASSERT_TRUE(g.TryGoal({0.05, 0}, M_PI / 2, true, r.slam, r.bumps));
+  ASSERT_TRUE(g.TryGoal(0, {0.05, 0}, M_PI / 2, true, r.slam, r.bumps));
   g.Begin(1);
   const GoTo::Result res = g.Step(1, r.slam, RangeScan{}, 0, r.bumps, r.follower);
   EXPECT_EQ(res.status, GoTo::Status::kDriving);
@@ -118,7 +118,7 @@ TEST(GoToTest, AFailedPlanWhileBlockedBacksOffAndLooksAround) {
   o.replan_backoff_s = 0.107;        // (off the 20 ms grid, so no retry falls on a tick)
   ASSERT_EQ(o.replan_backoff_after, 10);
   GoTo g(o, r.o.slam.geometry, r.o.slam.mounts);
-  ASSERT_TRUE(g.TryGoal({0.35, 0}, 0, true, r.slam, r.bumps));  // nothing seen yet: a path
+  ASSERT_TRUE(g.TryGoal(0, {0.35, 0}, 0, true, r.slam, r.bumps));  // nothing seen yet: a path
   EXPECT_EQ(g.planner_stats().plans, 1u);
   g.Begin(0);
   RangeScan scan;
