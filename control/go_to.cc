@@ -307,8 +307,9 @@ GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_s
   // Blocked: replan at once, but after a failed plan only when the back-off
   // allows (a failed search floods the whole grid; every period was too much).
   // A search longer than a period's budget goes on in the next periods: the
-  // robot holds still meanwhile if blocked or without a path yet, else it
-  // follows the path it has.
+  // robot holds still meanwhile if blocked or without a path yet (it looks
+  // around if blocked after a failed plan, as it would have), else it follows
+  // the path it has.
   std::optional<PathPlanner::Progress> plan;
   if (planner_.running()) {
     plan = ContinuePlan(t);
@@ -317,6 +318,7 @@ GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_s
     plan = Replan(t, slam, scan, bumps);
   }
   if (plan == PathPlanner::Progress::kRunning) {
+    if (blocked && !last_plan_ok_) return Drive({0, o.k_heading * o.look_around_factor});  // as before
     return blocked || path_.empty() ? Drive({0, 0}) : Drive(Pursue(me, front));
   }
   if (plan) {

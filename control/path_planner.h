@@ -80,6 +80,7 @@ class PathPlanner {
     uint64_t known_unreachable = 0;  // ... answered from the last failed search
     uint64_t clearance_reused = 0;   // calls that reused the clearance grid
     uint64_t pops = 0;          // A* queue pops, all searches
+    uint64_t max_pops = 0;      // ... the longest search's
   };
   const Stats& stats() const { return stats_; }
 
@@ -113,6 +114,7 @@ class PathPlanner {
   double failed_hard_m_ = 0;
   Stats stats_;
   bool running_ = false;
+  uint64_t search_pops_ = 0;  // the search in progress so far
   int s_ = 0, goal_i_ = 0, sx_ = 0, sy_ = 0, gx_ = 0, gy_ = 0;
   PlannerOptions o_;
   Eigen::Vector2d start_ = Eigen::Vector2d::Zero(), goal_ = Eigen::Vector2d::Zero();

@@ -71,7 +71,7 @@ nlohmann::json Daemon::StatusJson() {
   const auto& ps = core_->planner_stats();
   s["period"]["planner"] = {{"plans", ps.plans},       {"searches", ps.searches},
                             {"failed", ps.failed},     {"known_unreachable", ps.known_unreachable},
-                            {"pops", ps.pops}};
+                            {"pops", ps.pops},         {"max_pops", ps.max_pops}};
   if (bus_) {
     s["can"] = CanJson(*bus_);
     foreign_.AddStatus(WallNow(), &s["can"]);

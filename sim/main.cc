@@ -265,6 +265,13 @@ void PrintWorkProfile(const InProcessRun& run) {
                run.profile.phase_max(robot::TickPhase::kSlam) * 1e-6,
                run.profile.phase_max(robot::TickPhase::kMission) * 1e-6,
                run.profile.phase_max(robot::TickPhase::kPlanning) * 1e-6);
+  const auto& ps = run.core->planner_stats();
+  std::fprintf(stderr,
+               "irslam-sim: planner (exploring): %llu plans, %llu searches, %llu failed, %llu pops, the "
+               "longest search %llu pops\n",
+               static_cast<unsigned long long>(ps.plans), static_cast<unsigned long long>(ps.searches),
+               static_cast<unsigned long long>(ps.failed), static_cast<unsigned long long>(ps.pops),
+               static_cast<unsigned long long>(ps.max_pops));
 }
 
 // run's summary on stderr: the outcome, the work per period, the faults and

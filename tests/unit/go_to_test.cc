@@ -170,5 +170,94 @@ TEST(PathPlannerTest, ReusesItsGridsAndKnowsWhatTheLastFailedSearchCouldNotReach
   EXPECT_EQ(planner.stats().known_unreachable, 1u);
 }
 
+// Issue 15: a search run in pieces of a few pops finds the very path the
+// one-shot search finds, and a failed one fails the same (and is then known).
+TEST(PathPlannerTest, ASearchRunInPiecesIsTheOneShotSearch) {
+  PlannerOptions po;
+  po.inflation_m = 0.25;
+  po.hard_m = 0.19;
+  // A room 4 x 3 m, a closed box, and a wall tilted 30 degrees (diagonal clearances).
+  std::vector<Obstacle> obs = {{{0, 0}, {4, 0}}, {{4, 0}, {4, 3}}, {{4, 3}, {0, 3}}, {{0, 3}, {0, 0}},
+                               {{1.5, 1}, {2.5, 1}}, {{2.5, 1}, {2.5, 2}}, {{2.5, 2}, {1.5, 2}},
+                               {{1.5, 2}, {1.5, 1}}, {{2.9, 0.4}, {3.6, 0.8}}};
+  const Eigen::Vector2d start(0.5, 0.5);
+  for (const Eigen::Vector2d& goal : {Eigen::Vector2d(3.5, 2.5), Eigen::Vector2d(3.7, 0.3), Eigen::Vector2d(2.0, 1.5)}) {
+    const auto one_shot = PlanPath(obs, start, goal, po);
+    PathPlanner planner;
+    PathPlanner::Progress p = planner.Start(obs, start, goal, po);
+    ASSERT_EQ(p, PathPlanner::Progress::kRunning);
+    int pieces = 0;
+    int64_t pops = 0;
+    while (p == PathPlanner::Progress::kRunning) {
+      const int64_t before = pops;
+      p = planner.Continue(50, &pops);
+      EXPECT_LE(pops - before, 50);
+      ++pieces;
+      ASSERT_EQ(planner.running(), p == PathPlanner::Progress::kRunning);
+    }
+    EXPECT_GT(pieces, 5) << goal.transpose();
+    EXPECT_EQ(static_cast<uint64_t>(pops), planner.stats().pops);
+    EXPECT_EQ(planner.stats().max_pops, planner.stats().pops);
+    if (!one_shot) {
+      EXPECT_EQ(p, PathPlanner::Progress::kFailed);
+      EXPECT_EQ(planner.Start(obs, start, {1.95, 1.55}, po), PathPlanner::Progress::kFailed);  // known
+      EXPECT_EQ(planner.stats().known_unreachable, 1u);
+      continue;
+    }
+    ASSERT_EQ(p, PathPlanner::Progress::kFound) << goal.transpose();
+    ASSERT_EQ(planner.path().size(), one_shot->size());
+    for (size_t i = 0; i < one_shot->size(); ++i) EXPECT_EQ(planner.path()[i], (*one_shot)[i]) << i;
+  }
+}
+
+// With a budget of pops per period, a goal whose search needs more is
+// accepted; the robot holds still while the search goes on in the next
+// periods, then drives the path; an unreachable one is given up once its
+// search has ended.
+TEST(GoToTest, ASearchLongerThanThePeriodsBudgetGoesOnInTheNextPeriodsTheRobotHoldingStill) {
+  Rig r;
+  GoToOptions o;
+  o.plan_pops_per_period = 20;
+  GoTo g(o, r.o.slam.geometry, r.o.slam.mounts);
+  ASSERT_TRUE(g.TryGoal(0, {2, 0}, 0, true, r.slam, r.bumps));
+  EXPECT_TRUE(g.path().empty());  // not yet
+  g.Begin(0);
+  int held = 0;
+  double t = 0;
+  GoTo::Result res;
+  for (; t < 5; t += 0.02) {
+    res = g.Step(t, r.slam, RangeScan{}, 0, r.bumps, r.follower);
+    ASSERT_EQ(res.status, GoTo::Status::kDriving);
+    if (!g.path().empty()) break;
+    EXPECT_EQ(res.twist.v, 0);
+    EXPECT_EQ(res.twist.omega, 0);
+    ++held;
+  }
+  EXPECT_GT(held, 1);
+  ASSERT_FALSE(g.path().empty());
+  EXPECT_NEAR((g.path().back() - Eigen::Vector2d(2, 0)).norm(), 0, 1e-9);
+  EXPECT_DOUBLE_EQ(res.twist.v, 0.18);  // the period the path came: driving
+  // A goal walled in by bump points: accepted (the search did not end in the
+  // period), given up when it has.
+  Rig walled;
+  for (double a = 0; a < 2 * M_PI; a += 0.05)  // contacts all round, ~0.5 m from the goal
+    walled.bumps.Record({1 + 0.7 * std::cos(a), 1 + 0.7 * std::sin(a), a + M_PI}, 3);
+  ASSERT_GT(walled.bumps.points().size(), 20u);
+  GoTo w(o, walled.o.slam.geometry, walled.o.slam.mounts);
+  ASSERT_TRUE(w.TryGoal(0, {1, 1}, 0, true, walled.slam, walled.bumps));
+  w.Begin(0);
+  std::string why;
+  for (t = 0.02; t < 60 && why.empty(); t += 0.02) {
+    res = w.Step(t, walled.slam, RangeScan{}, 0, walled.bumps, walled.follower);
+    if (res.status == GoTo::Status::kGiveUp) why = res.why;
+  }
+  EXPECT_EQ(why, "no way found");
+  EXPECT_LT(t, 20);  // when the search ended, not after go_to_stuck_s
+  GoToOptions unbounded = o;
+  unbounded.plan_pops_per_period = 0;
+  GoTo u(unbounded, walled.o.slam.geometry, walled.o.slam.mounts);
+  EXPECT_FALSE(u.TryGoal(0, {1, 1}, 0, true, walled.slam, walled.bumps));  // unbounded: known at once
+}
+
 }  // namespace
 }  // namespace irslam::control
