@@ -14,13 +14,17 @@
 namespace irslam::drivers {
 
 // What both backends share: a non-blocking fd on the io_context, drained of all
-// it holds each time it becomes readable.
+// it holds each time it becomes readable (Start) or when polled (StartPolled).
 class DescriptorBus : public CanBus {
  public:
   explicit DescriptorBus(boost::asio::io_context& io) : descriptor_(io) {}
   void Start(FrameHandler handler) override {
     handler_ = std::move(handler);
     WaitRead();
+  }
+  void StartPolled(FrameHandler handler) override { handler_ = std::move(handler); }
+  void Poll() override {
+    if (open_) Drain();
   }
   const CanStats& stats() const override { return stats_; }
 
