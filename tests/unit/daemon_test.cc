@@ -97,7 +97,16 @@ class DaemonTest : public ::testing::Test {
     nlohmann::json reply;
     daemon_->Handle(r, self, [&reply](nlohmann::json j) { reply = std::move(j); });
     // A stop's reply waits for the map writer thread's outcome, posted onto io_.
-    while (reply.is_null()) io_.run_one();
+    // io_ has work only while the write is in flight (the bus is drained by
+    // Tick, no period timer is armed here), so it may have stopped since, and a
+    // stopped io_context runs nothing until restarted.
+    while (reply.is_null()) {
+      io_.restart();
+      if (io_.run_one() == 0) {
+        ADD_FAILURE() << "no reply, and nothing left on io_ that could give one";
+        break;
+      }
+    }
     return reply;
   }
 
