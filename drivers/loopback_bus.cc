@@ -107,7 +107,7 @@ void LoopbackBus::Drain() {
     msg.msg_iovlen = 1;
     msg.msg_control = ctrl;
     msg.msg_controllen = sizeof ctrl;
-    const ssize_t n = ::recvmsg(descriptor_.native_handle(), &msg, MSG_DONTWAIT);
+    const ssize_t n = ::recvmsg(fd(), &msg, MSG_DONTWAIT);
     if (n < 0) {
       if (errno == EINTR) continue;
       return;  // EAGAIN: drained
@@ -191,7 +191,7 @@ int LoopbackBus::SendTo(const std::string& peer, const std::vector<can_frame>& b
   sockaddr_un addr;
   socklen_t len;
   if (!MakeAddr(peer, &addr, &len)) return -1;
-  const ssize_t n = ::sendto(descriptor_.native_handle(), batch.data(), batch.size() * sizeof(can_frame),
+  const ssize_t n = ::sendto(fd(), batch.data(), batch.size() * sizeof(can_frame),
                              MSG_DONTWAIT | MSG_NOSIGNAL, reinterpret_cast<sockaddr*>(&addr), len);
   if (n >= 0) return 1;
   if (errno == ECONNREFUSED || errno == ENOENT) {
@@ -271,9 +271,7 @@ void LoopbackBus::Close() {
   open_ = false;
   retry_timer_.cancel();
   *alive_ = false;
-  boost::system::error_code ec;
-  descriptor_.cancel(ec);
-  descriptor_.close(ec);
+  CloseFd();
   ::unlink(own_path_.c_str());
 }
 
