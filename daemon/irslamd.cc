@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <thread>
@@ -80,7 +82,9 @@ bool Daemon::Open(std::string* error) {
   if (!OpenAccess(error)) return false;
   api_ = std::make_unique<ApiServer>(io_, options_.socket_path, options_.limits, this);
   if (!api_->Listen(error, socket_gid_)) return false;
-  bus_->Start([this](const can_frame& f, double) { OnFrame(f); });
+  // Drained once per period, at the start of Tick (one wakeup per period, not
+  // one per frame: issue 15's CPU budget); each frame keeps its receive time.
+  bus_->StartPolled([this](const can_frame& f, double rx) { OnFrame(f, rx); });
   gpio_->Start([this](drivers::Gpio::Input in, bool active) { OnGpioInput(in, active); });
   return true;
 }
@@ -134,8 +138,19 @@ void Daemon::OpenRecorder() {
   std::fprintf(stderr, "<6>irslamd: recording the bus to %s\n", recorder_->stats().path.c_str());
 }
 
-void Daemon::OnFrame(const can_frame& f) {
-  const double now = RobotNow();  // one time for the core and the recording
+double Daemon::FrameRobotTime(double rx_realtime_s) {
+  int64_t us = poll_us_;
+  if (rx_realtime_s > 0) {
+    const double age = std::clamp(poll_realtime_s_ - rx_realtime_s, 0.0, kMaxFrameAgeS);
+    us -= std::llround(age * 1e6);
+  }
+  us = std::max(us, last_handed_us_);
+  last_handed_us_ = us;
+  return RobotTimeFromLogNs(us * 1000, options_.time_scale);
+}
+
+void Daemon::OnFrame(const can_frame& f, double rx_realtime_s) {
+  const double now = FrameRobotTime(rx_realtime_s);  // one time for the core and the recording
   if (recorder_) recorder_->Record(f, now);
   if (!ForeignCommanderWatch::IsCommanderFrame(f)) {
     const int64_t t0 = Ns(clock_());
@@ -224,6 +239,12 @@ void Daemon::Tick() {
   const WallTime woke = clock_();
   scheduler_.OnWake(Ns(woke));
   if (api_) api_->NewPeriod();
+  // This period's frames, each at its receive time, before the tick.
+  timespec rt{};
+  ::clock_gettime(CLOCK_REALTIME, &rt);
+  poll_realtime_s_ = static_cast<double>(rt.tv_sec) + 1e-9 * static_cast<double>(rt.tv_nsec);
+  poll_us_ = NowUs();
+  if (bus_) bus_->Poll();
   const double now = RobotNow();
   if (options_.test_hang_at_s >= 0 && now >= options_.test_hang_at_s) {
     std::fprintf(stderr, "<3>irslamd: --test-hang-at: the control loop hangs now (a test of the watchdog)\n");

@@ -8,6 +8,7 @@
 #ifndef IRSLAM_DAEMON_IRSLAMD_H_
 #define IRSLAM_DAEMON_IRSLAMD_H_
 
+#include <algorithm>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
@@ -95,9 +96,16 @@ class Daemon : public ApiServer::Dispatcher {
   double WallNow() const { return SecondsBetween(start_, clock_()); }
   // Whole microseconds of wall time: the bus recorder writes them exactly
   // (daemon/candump_log.h), so irslam-replay gives its core the same times.
+  // Wall time since the start in whole microseconds, and robot time from it.
+  int64_t NowUs() const {
+    return static_cast<int64_t>(std::chrono::duration_cast<std::chrono::microseconds>(clock_() - start_).count());
+  }
+  // Every robot time the daemon hands out (to the core, the recording) comes from
+  // here or FrameRobotTime, which never goes below it: the core and the log see
+  // time only go forward.
   double RobotNow() const {
-    const auto us = std::chrono::duration_cast<std::chrono::microseconds>(clock_() - start_).count();
-    return RobotTimeFromLogNs(static_cast<int64_t>(us) * 1000, options_.time_scale);
+    last_handed_us_ = std::max(last_handed_us_, NowUs());
+    return RobotTimeFromLogNs(last_handed_us_ * 1000, options_.time_scale);
   }
   static int64_t Ns(WallTime t);
   // The live core's map: a typed snapshot now, its JSON built when called (on
@@ -114,7 +122,14 @@ class Daemon : public ApiServer::Dispatcher {
   void ArmTimer();
   void OnSignal(int signo);
   void WaitSignal();
-  void OnFrame(const can_frame& f);
+  // A frame drained from the bus at the start of a period (rx_realtime_s: its
+  // kernel receive time, CLOCK_REALTIME seconds; 0 when unknown).
+  void OnFrame(const can_frame& f, double rx_realtime_s);
+  // The robot time of a frame received rx_realtime_s (see OnFrame): now, less
+  // its age in the socket (at most kMaxFrameAgeS), never before a robot time
+  // already handed out, in whole microseconds like RobotNow().
+  double FrameRobotTime(double rx_realtime_s);
+  static constexpr double kMaxFrameAgeS = 0.25;
   // Sends a frame (and records it when [record] is on).
   void SendFrame(const can_frame& f, double now);
   void OpenRecorder();
@@ -155,6 +170,9 @@ class Daemon : public ApiServer::Dispatcher {
   // tick (SLAM) plus the tick itself, measured here around the core's calls.
   robot::TickProfile profile_;
   int64_t frames_ns_ = 0;  // OnFrame since the last tick
+  double poll_realtime_s_ = 0;  // CLOCK_REALTIME when this period's frames were drained
+  int64_t poll_us_ = 0;         // RobotNow()'s microseconds then
+  mutable int64_t last_handed_us_ = 0;  // the latest robot time handed out (RobotNow, frames)
   control::MissionState last_state_ = control::MissionState::kIdle;
   int last_cells_done_ = 0;  // cleaning cells finished at the last tick
   bool running_ = false;

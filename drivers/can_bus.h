@@ -4,7 +4,8 @@
 //     sockets in the directory PATH, with vcan's semantics (every frame a node sends
 //     reaches every other node; nodes may join and leave at any time), for hosts
 //     whose kernel has no CAN support.
-// Receiving is asynchronous on the caller's io_context; sending never blocks.
+// Receiving is asynchronous on the caller's io_context, or polled by the caller;
+// sending never blocks.
 #ifndef IRSLAM_DRIVERS_CAN_BUS_H_
 #define IRSLAM_DRIVERS_CAN_BUS_H_
 
@@ -44,8 +45,14 @@ class CanBus {
   CanBus(const CanBus&) = delete;
   CanBus& operator=(const CanBus&) = delete;
 
-  // Starts delivering received frames to `handler` on the io_context.
+  // Starts delivering received frames to `handler` on the io_context, as they arrive.
   virtual void Start(FrameHandler handler) = 0;
+  // Or: frames are delivered only by Poll(), which reads everything received so
+  // far without blocking (a fixed-period loop drains the bus once per period:
+  // one wakeup per period instead of one per frame; rx_time_s keeps each
+  // frame's kernel receive time).
+  virtual void StartPolled(FrameHandler handler) = 0;
+  virtual void Poll() = 0;
   // Queues a frame for transmission; false (and counted) if it could not be sent.
   virtual bool Send(const can_frame& frame) = 0;
   virtual void Close() = 0;

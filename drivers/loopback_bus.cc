@@ -16,6 +16,7 @@
 #include <dirent.h>
 #include <fcntl.h>
 #include <sys/socket.h>
+#include <sys/uio.h>
 #include <sys/stat.h>
 #include <sys/un.h>
 #include <unistd.h>
@@ -78,6 +79,10 @@ bool LoopbackBus::Open(std::string* error) {
   }
   int rcvbuf = 1 << 20;
   ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof rcvbuf);
+  // Each datagram's kernel receive time, as SocketCAN gives (a polled reader
+  // drains a period's frames at once and must not stamp them all "now").
+  int on = 1;
+  stats_.kernel_timestamps = ::setsockopt(fd, SOL_SOCKET, SO_TIMESTAMPNS, &on, sizeof on) == 0;
   descriptor_.assign(fd);
   open_ = true;
   return true;
@@ -95,7 +100,14 @@ bool LoopbackBus::Wanted(uint32_t id) const {
 void LoopbackBus::Drain() {
   for (int i = 0; i < 64 && open_; ++i) {
     can_frame batch[kMaxBatch + 1];
-    const ssize_t n = ::recv(descriptor_.native_handle(), batch, sizeof batch, MSG_DONTWAIT);
+    iovec iov{batch, sizeof batch};
+    alignas(cmsghdr) char ctrl[CMSG_SPACE(sizeof(timespec))];
+    msghdr msg{};
+    msg.msg_iov = &iov;
+    msg.msg_iovlen = 1;
+    msg.msg_control = ctrl;
+    msg.msg_controllen = sizeof ctrl;
+    const ssize_t n = ::recvmsg(fd(), &msg, MSG_DONTWAIT);
     if (n < 0) {
       if (errno == EINTR) continue;
       return;  // EAGAIN: drained
@@ -105,9 +117,16 @@ void LoopbackBus::Drain() {
       ++stats_.rx_dropped;  // not a whole number of CAN_MTU frames: not ours
       continue;
     }
-    timespec ts;
-    ::clock_gettime(CLOCK_REALTIME, &ts);
-    const double now = static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+    timespec ts{};
+    bool stamped = false;
+    for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
+      if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_TIMESTAMPNS) {
+        std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
+        stamped = true;
+      }
+    }
+    if (!stamped) ::clock_gettime(CLOCK_REALTIME, &ts);
+    const double rx = static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
     const size_t count = static_cast<size_t>(n) / sizeof(can_frame);
     for (size_t k = 0; k < count && open_; ++k) {
       if (!Wanted(batch[k].can_id)) {
@@ -115,8 +134,8 @@ void LoopbackBus::Drain() {
         continue;
       }
       ++stats_.rx_frames;
-      stats_.last_rx_time = now;
-      if (handler_) handler_(batch[k], now);
+      stats_.last_rx_time = rx;
+      if (handler_) handler_(batch[k], rx);
     }
   }
 }
@@ -172,7 +191,7 @@ int LoopbackBus::SendTo(const std::string& peer, const std::vector<can_frame>& b
   sockaddr_un addr;
   socklen_t len;
   if (!MakeAddr(peer, &addr, &len)) return -1;
-  const ssize_t n = ::sendto(descriptor_.native_handle(), batch.data(), batch.size() * sizeof(can_frame),
+  const ssize_t n = ::sendto(fd(), batch.data(), batch.size() * sizeof(can_frame),
                              MSG_DONTWAIT | MSG_NOSIGNAL, reinterpret_cast<sockaddr*>(&addr), len);
   if (n >= 0) return 1;
   if (errno == ECONNREFUSED || errno == ENOENT) {
@@ -252,9 +271,7 @@ void LoopbackBus::Close() {
   open_ = false;
   retry_timer_.cancel();
   *alive_ = false;
-  boost::system::error_code ec;
-  descriptor_.cancel(ec);
-  descriptor_.close(ec);
+  CloseFd();
   ::unlink(own_path_.c_str());
 }
 

@@ -119,7 +119,7 @@ void SocketCanBus::Drain() {
     msg.msg_iovlen = 1;
     msg.msg_control = ctrl;
     msg.msg_controllen = sizeof ctrl;
-    const ssize_t n = ::recvmsg(descriptor_.native_handle(), &msg, MSG_DONTWAIT);
+    const ssize_t n = ::recvmsg(fd(), &msg, MSG_DONTWAIT);
     if (n < 0) {
       if (errno == EINTR) continue;
       if (errno == ENETDOWN) {
@@ -163,7 +163,7 @@ bool SocketCanBus::Send(const can_frame& frame) {
     ++stats_.tx_dropped;
     return false;
   }
-  const ssize_t n = ::send(descriptor_.native_handle(), &frame, CAN_MTU, MSG_DONTWAIT);
+  const ssize_t n = ::send(fd(), &frame, CAN_MTU, MSG_DONTWAIT);
   if (n == static_cast<ssize_t>(CAN_MTU)) {
     SetLink(true, "");
     ++stats_.tx_frames;
@@ -181,9 +181,7 @@ bool SocketCanBus::Send(const can_frame& frame) {
 void SocketCanBus::Close() {
   if (!open_) return;
   open_ = false;
-  boost::system::error_code ec;
-  descriptor_.cancel(ec);
-  descriptor_.close(ec);
+  CloseFd();
 }
 
 std::unique_ptr<CanBus> OpenCanBus(boost::asio::io_context& io, const CanBusOptions& options,

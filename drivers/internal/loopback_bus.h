@@ -1,6 +1,8 @@
 #ifndef IRSLAM_DRIVERS_INTERNAL_LOOPBACK_BUS_H_
 #define IRSLAM_DRIVERS_INTERNAL_LOOPBACK_BUS_H_
 
+#include <unistd.h>
+
 #include <boost/asio/posix/stream_descriptor.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <deque>
@@ -13,8 +15,8 @@
 
 namespace irslam::drivers {
 
-// What both backends share: a non-blocking fd on the io_context, drained of all
-// it holds each time it becomes readable.
+// What both backends share: a non-blocking fd, drained of all it holds each time
+// it becomes readable (Start: on the io_context) or when polled (StartPolled).
 class DescriptorBus : public CanBus {
  public:
   explicit DescriptorBus(boost::asio::io_context& io) : descriptor_(io) {}
@@ -22,9 +24,28 @@ class DescriptorBus : public CanBus {
     handler_ = std::move(handler);
     WaitRead();
   }
+  void StartPolled(FrameHandler handler) override {
+    handler_ = std::move(handler);
+    // Off the io_context's reactor: asio keeps an assigned descriptor in epoll
+    // whether or not a wait is pending, so every datagram would still wake the
+    // loop, only for it to find nothing to do.
+    if (descriptor_.is_open()) polled_fd_ = descriptor_.release();
+  }
+  void Poll() override {
+    if (open_) Drain();
+  }
   const CanStats& stats() const override { return stats_; }
 
  protected:
+  // The socket, on the reactor (Start) or off it (StartPolled).
+  int fd() { return polled_fd_ >= 0 ? polled_fd_ : descriptor_.native_handle(); }
+  void CloseFd() {
+    boost::system::error_code ec;
+    descriptor_.cancel(ec);
+    descriptor_.close(ec);
+    if (polled_fd_ >= 0) ::close(polled_fd_);
+    polled_fd_ = -1;
+  }
   // Reads until the fd would block, delivering frames to handler_.
   virtual void Drain() = 0;
   void WaitRead() {
@@ -38,6 +59,7 @@ class DescriptorBus : public CanBus {
   }
 
   boost::asio::posix::stream_descriptor descriptor_;
+  int polled_fd_ = -1;  // the socket, released from descriptor_ by StartPolled
   FrameHandler handler_;
   CanStats stats_;
   bool open_ = false;

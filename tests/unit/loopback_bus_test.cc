@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <boost/asio/io_context.hpp>
+#include <ctime>
 #include <filesystem>
+#include <thread>
 
 #include "drivers/can_bus.h"
 #include "proto/codec.h"
@@ -48,6 +50,45 @@ class LoopbackBusTest : public ::testing::Test {
   boost::asio::io_context io_;
   std::string dir_;
 };
+
+// A polled node (the daemon drains the bus once per period): nothing is
+// delivered until Poll(), which hands over every frame received so far, in
+// order, each with its kernel receive time (not the time of the poll).
+TEST_F(LoopbackBusTest, APolledNodeGetsEverythingAtPollWithEachFramesReceiveTime) {
+  auto a = Join();
+  std::string error;
+  auto polled = OpenCanBus(io_, {"unix:" + dir_, {}}, &error);
+  ASSERT_NE(polled, nullptr) << error;
+  std::vector<std::pair<can_frame, double>> got;
+  polled->StartPolled([&](const can_frame& f, double rx) { got.push_back({f, rx}); });
+  const auto realtime = [] {
+    timespec ts;
+    ::clock_gettime(CLOCK_REALTIME, &ts);
+    return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+  };
+  const double t0 = realtime();
+  ASSERT_TRUE(a->bus->Send(Frame(0x100, 1)));
+  Pump();  // a's flush runs on the io_context; the polled node does not read
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  const double t1 = realtime();
+  ASSERT_TRUE(a->bus->Send(Frame(0x101, 2)));
+  Pump();
+  EXPECT_TRUE(got.empty());
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  const double t_poll = realtime();
+  polled->Poll();
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[0].first.data[0], 1);
+  EXPECT_EQ(got[1].first.data[0], 2);
+  // Received when sent, not when polled: the first ~60 ms before the poll.
+  EXPECT_GE(got[0].second, t0);
+  EXPECT_LT(got[0].second, t1);
+  EXPECT_GE(got[1].second, t1);
+  EXPECT_LT(got[1].second, t_poll - 0.02);
+  EXPECT_TRUE(polled->stats().kernel_timestamps);
+  polled->Poll();  // nothing new
+  EXPECT_EQ(got.size(), 2u);
+}
 
 TEST_F(LoopbackBusTest, EveryFrameReachesEveryOtherNodeOfThree) {
   auto a = Join(), b = Join(), c = Join();
