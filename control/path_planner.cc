@@ -232,9 +232,17 @@ PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
     failed_valid_ = false;
   }
   if (nx > hypot_nx_ || ny > hypot_ny_) {
-    hypot_nx_ = std::max(nx, hypot_nx_);
-    hypot_ny_ = std::max(ny, hypot_ny_);
-    hypot_.assign(static_cast<size_t>(hypot_nx_) * static_cast<size_t>(hypot_ny_), -1.0);
+    // Grown with slack, the distances computed so far kept: a grid a cell
+    // larger (the robot moved, a line grew) neither reallocates nor recomputes.
+    const int new_nx = std::max(nx + nx / 4, hypot_nx_), new_ny = std::max(ny + ny / 4, hypot_ny_);
+    std::vector<double> grown(static_cast<size_t>(new_nx) * static_cast<size_t>(new_ny), -1.0);
+    for (int ay = 0; ay < hypot_ny_; ++ay) {
+      std::copy_n(hypot_.begin() + static_cast<std::ptrdiff_t>(ay) * hypot_nx_, hypot_nx_,
+                  grown.begin() + static_cast<std::ptrdiff_t>(ay) * new_nx);
+    }
+    hypot_.swap(grown);
+    hypot_nx_ = new_nx;
+    hypot_ny_ = new_ny;
   }
   const auto [sx, sy] = grid.Cell(start);
   const auto [gx, gy] = grid.Cell(goal);
