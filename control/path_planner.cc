@@ -133,7 +133,7 @@ bool SameObstacles(const std::vector<Obstacle>& a, const std::vector<Obstacle>& 
 double PathPlanner::H(int dx, int dy) {
   const int ax = std::abs(dx), ay = std::abs(dy);
   double& h = hypot_[static_cast<size_t>(ay * hypot_nx_ + ax)];
-  if (h < 0) h = std::hypot(dx, dy);
+  if (h == 0) h = std::hypot(dx, dy);  // (0 at 0, 0 is recomputed: also 0)
   return h;
 }
 
@@ -159,7 +159,7 @@ bool PathPlanner::SearchSome(int64_t max_pops, int64_t* pops) {
     ++search_pops_;
     ++*pops;
     if (i == goal_i) return true;
-    if (f > g_[static_cast<size_t>(i)] + h(i) + 1e-9) continue;
+    if (f > G(i) + h(i) + 1e-9) continue;
     const int ix = i % nx, iy = i / nx;
     for (int k = 0; k < 8; ++k) {
       const int jx = ix + dx[k], jy = iy + dy[k];
@@ -173,8 +173,9 @@ bool PathPlanner::SearchSome(int64_t max_pops, int64_t* pops) {
         if (H(jx - sx, jy - sy) * o.resolution_m > o.inflation_m + o.resolution_m) continue;
         if (cj < o.hard_m && cj < clear_[static_cast<size_t>(i)]) continue;
       }
-      const double c = g_[static_cast<size_t>(i)] + (k < 4 ? 1.0 : M_SQRT2);
-      if (c < g_[static_cast<size_t>(j)]) {
+      const double c = G(i) + (k < 4 ? 1.0 : M_SQRT2);
+      if (c < G(j)) {
+        stamp_[static_cast<size_t>(j)] = gen_;
         g_[static_cast<size_t>(j)] = c;
         from_[static_cast<size_t>(j)] = i;
         open_.push_back({c + h(j), j});
@@ -193,6 +194,23 @@ std::optional<std::vector<Eigen::Vector2d>> PathPlanner::Plan(
   if (p == Progress::kRunning) p = Continue(std::numeric_limits<int64_t>::max(), &pops);
   if (p != Progress::kFound) return std::nullopt;
   return path_;
+}
+
+// The distance table covers offsets up to nx, ny.
+void PathPlanner::GrowHypot(int nx, int ny) {
+  if (nx <= hypot_nx_ && ny <= hypot_ny_) return;
+  // Grown with slack, the distances computed so far kept: a grid a cell
+  // larger (the robot moved, a line grew) neither reallocates nor recomputes.
+  const int new_nx = std::max(nx + nx / 4, hypot_nx_), new_ny = std::max(ny + ny / 4, hypot_ny_);
+  LazyArray<double> grown;
+  grown.Reserve(static_cast<size_t>(new_nx) * static_cast<size_t>(new_ny));
+  for (int ay = 0; ay < hypot_ny_; ++ay) {
+    std::copy_n(hypot_.p.get() + static_cast<std::ptrdiff_t>(ay) * hypot_nx_, hypot_nx_,
+                grown.p.get() + static_cast<std::ptrdiff_t>(ay) * new_nx);
+  }
+  hypot_ = std::move(grown);
+  hypot_nx_ = new_nx;
+  hypot_ny_ = new_ny;
 }
 
 PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
@@ -231,19 +249,7 @@ PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
     Clearances(obstacles, grid, o.inflation_m, &clear_);
     failed_valid_ = false;
   }
-  if (nx > hypot_nx_ || ny > hypot_ny_) {
-    // Grown with slack, the distances computed so far kept: a grid a cell
-    // larger (the robot moved, a line grew) neither reallocates nor recomputes.
-    const int new_nx = std::max(nx + nx / 4, hypot_nx_), new_ny = std::max(ny + ny / 4, hypot_ny_);
-    std::vector<double> grown(static_cast<size_t>(new_nx) * static_cast<size_t>(new_ny), -1.0);
-    for (int ay = 0; ay < hypot_ny_; ++ay) {
-      std::copy_n(hypot_.begin() + static_cast<std::ptrdiff_t>(ay) * hypot_nx_, hypot_nx_,
-                  grown.begin() + static_cast<std::ptrdiff_t>(ay) * new_nx);
-    }
-    hypot_.swap(grown);
-    hypot_nx_ = new_nx;
-    hypot_ny_ = new_ny;
-  }
+  GrowHypot(nx, ny);
   const auto [sx, sy] = grid.Cell(start);
   const auto [gx, gy] = grid.Cell(goal);
   if (gx < 0 || gy < 0 || gx >= nx || gy >= ny ||
@@ -253,7 +259,7 @@ PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
   }
   const int s = sy * nx + sx, goal_i = gy * nx + gx;
   if (failed_valid_ && failed_start_ == s && failed_hard_m_ == o.hard_m &&
-      g_[static_cast<size_t>(goal_i)] >= 1e18) {
+      G(goal_i) >= 1e18) {
     // The last search from here visited every cell that can be reached: not this one.
     ++stats_.failed;
     ++stats_.known_unreachable;
@@ -266,10 +272,17 @@ PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
   start_ = start;
   goal_ = goal;
   const size_t n = static_cast<size_t>(nx) * static_cast<size_t>(ny);
-  g_.assign(n, 1e18);
-  from_.assign(n, -1);
+  g_.Reserve(n);
+  from_.Reserve(n);
+  stamp_.Reserve(n);
+  if (++gen_ == 0) {  // wrapped: no stamp may look current
+    std::fill_n(stamp_.p.get(), stamp_.n, 0u);
+    gen_ = 1;
+  }
   open_.clear();
+  stamp_[static_cast<size_t>(s)] = gen_;
   g_[static_cast<size_t>(s)] = 0;
+  from_[static_cast<size_t>(s)] = -1;
   open_.push_back({H(sx - gx, sy - gy), s});
   search_pops_ = 0;
   running_ = true;
@@ -286,7 +299,7 @@ PathPlanner::Progress PathPlanner::Continue(int64_t max_pops, int64_t* pops) {
 
 PathPlanner::Progress PathPlanner::Finish() {
   const int nx = geo_.nx, s = s_, goal_i = goal_i_;
-  if (from_[static_cast<size_t>(goal_i)] < 0 && goal_i != s) {
+  if (From(goal_i) < 0 && goal_i != s) {
     failed_valid_ = true;
     failed_start_ = s;
     failed_hard_m_ = o_.hard_m;
@@ -294,7 +307,7 @@ PathPlanner::Progress PathPlanner::Finish() {
     return Progress::kFailed;
   }
   std::vector<Eigen::Vector2d> cells;
-  for (int i = goal_i; i != -1; i = from_[static_cast<size_t>(i)])
+  for (int i = goal_i; i != -1; i = From(i))
     cells.push_back(Eigen::Vector2d(geo_.lo.x() + (i % nx) * geo_.res, geo_.lo.y() + (i / nx) * geo_.res));
   std::reverse(cells.begin(), cells.end());
   // Keep the corners only.

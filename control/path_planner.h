@@ -13,6 +13,9 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <new>
 #include <optional>
 #include <vector>
 
@@ -97,15 +100,45 @@ class PathPlanner {
   bool SearchSome(int64_t max_pops, int64_t* pops);  // true once it has ended
   Progress Finish();
   double H(int dx, int dy);
+  void GrowHypot(int nx, int ny);
 
   Geometry geo_;
   std::vector<Obstacle> obstacles_;  // what clear_ was made from
   double clear_inflation_m_ = -1;
   std::vector<float> clear_;
-  std::vector<double> g_;
-  std::vector<int> from_;
+  // Per cell, valid where stamp_ holds the search's number gen_ (so a search
+  // starts without filling them): its cost and predecessor. The arrays come
+  // from calloc, whose large blocks are pages the kernel supplies as they are
+  // first written: a grid that grows costs page faults only where a search
+  // goes (the first plan in a 16 x 12 m room touched ~5 MB in one period).
+  struct FreeDeleter {
+    void operator()(void* p) const { std::free(p); }
+  };
+  template <typename T>
+  struct LazyArray {
+    std::unique_ptr<T[], FreeDeleter> p;
+    size_t n = 0;
+    void Reserve(size_t size) {
+      if (size <= n) return;
+      p.reset(static_cast<T*>(std::calloc(size, sizeof(T))));
+      if (!p) throw std::bad_alloc();
+      n = size;
+    }
+    T& operator[](size_t i) { return p[i]; }
+    const T& operator[](size_t i) const { return p[i]; }
+  };
+  LazyArray<double> g_;
+  LazyArray<int> from_;
+  LazyArray<uint32_t> stamp_;
+  uint32_t gen_ = 0;
+  LazyArray<double> hypot_;  // hypot(|dx|, |dy|) by offset, 0: not computed yet (bar 0, 0)
+  double G(int i) const {
+    return stamp_[static_cast<size_t>(i)] == gen_ ? g_[static_cast<size_t>(i)] : 1e18;
+  }
+  int From(int i) const {
+    return stamp_[static_cast<size_t>(i)] == gen_ ? from_[static_cast<size_t>(i)] : -1;
+  }
   std::vector<std::pair<double, int>> open_;  // a binary heap, as std::priority_queue keeps it
-  std::vector<double> hypot_;  // hypot(|dx|, |dy|) by offset, -1: not computed yet
   int hypot_nx_ = 0, hypot_ny_ = 0;
   // The last failed search: from this start cell on this clearance grid, the
   // cells with a finite g_ were all that can be reached.
