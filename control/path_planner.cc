@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <functional>
 #include <limits>
+#include <new>
 
 namespace irslam::control {
 namespace {
@@ -133,8 +134,28 @@ bool SameObstacles(const std::vector<Obstacle>& a, const std::vector<Obstacle>& 
 double PathPlanner::H(int dx, int dy) {
   const int ax = std::abs(dx), ay = std::abs(dy);
   double& h = hypot_[static_cast<size_t>(ay * hypot_nx_ + ax)];
-  if (h < 0) h = std::hypot(dx, dy);
+  if (h == 0) h = std::hypot(dx, dy);
   return h;
+}
+
+void PathPlanner::GrowHypot(int nx, int ny) {
+  // Grown with slack, the distances computed so far kept: a grid a cell
+  // larger (the robot moved, a line grew) neither reallocates nor recomputes.
+  // Only the distances computed are copied: the rest of the new table stays
+  // untouched (reading the old one's untouched pages makes nothing resident).
+  const int new_nx = std::max(nx + nx / 4, hypot_nx_), new_ny = std::max(ny + ny / 4, hypot_ny_);
+  std::unique_ptr<double[], Free> grown(
+      static_cast<double*>(std::calloc(static_cast<size_t>(new_nx) * static_cast<size_t>(new_ny), sizeof(double))));
+  if (!grown) throw std::bad_alloc();
+  for (int ay = 0; ay < hypot_ny_; ++ay) {
+    for (int ax = 0; ax < hypot_nx_; ++ax) {
+      const double h = hypot_[static_cast<size_t>(ay) * hypot_nx_ + ax];
+      if (h != 0) grown[static_cast<size_t>(ay) * new_nx + ax] = h;
+    }
+  }
+  hypot_ = std::move(grown);
+  hypot_nx_ = new_nx;
+  hypot_ny_ = new_ny;
 }
 
 // A* (8-connected) from cell s_ = (sx_, sy_) to goal_i_ = (gx_, gy_): each
@@ -231,19 +252,7 @@ PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
     Clearances(obstacles, grid, o.inflation_m, &clear_);
     failed_valid_ = false;
   }
-  if (nx > hypot_nx_ || ny > hypot_ny_) {
-    // Grown with slack, the distances computed so far kept: a grid a cell
-    // larger (the robot moved, a line grew) neither reallocates nor recomputes.
-    const int new_nx = std::max(nx + nx / 4, hypot_nx_), new_ny = std::max(ny + ny / 4, hypot_ny_);
-    std::vector<double> grown(static_cast<size_t>(new_nx) * static_cast<size_t>(new_ny), -1.0);
-    for (int ay = 0; ay < hypot_ny_; ++ay) {
-      std::copy_n(hypot_.begin() + static_cast<std::ptrdiff_t>(ay) * hypot_nx_, hypot_nx_,
-                  grown.begin() + static_cast<std::ptrdiff_t>(ay) * new_nx);
-    }
-    hypot_.swap(grown);
-    hypot_nx_ = new_nx;
-    hypot_ny_ = new_ny;
-  }
+  if (nx > hypot_nx_ || ny > hypot_ny_) GrowHypot(nx, ny);
   const auto [sx, sy] = grid.Cell(start);
   const auto [gx, gy] = grid.Cell(goal);
   if (gx < 0 || gy < 0 || gx >= nx || gy >= ny ||

@@ -13,6 +13,8 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <cstdlib>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -97,6 +99,7 @@ class PathPlanner {
   bool SearchSome(int64_t max_pops, int64_t* pops);  // true once it has ended
   Progress Finish();
   double H(int dx, int dy);
+  void GrowHypot(int nx, int ny);  // the table for a grid of nx x ny cells
 
   Geometry geo_;
   std::vector<Obstacle> obstacles_;  // what clear_ was made from
@@ -105,7 +108,15 @@ class PathPlanner {
   std::vector<double> g_;
   std::vector<int> from_;
   std::vector<std::pair<double, int>> open_;  // a binary heap, as std::priority_queue keeps it
-  std::vector<double> hypot_;  // hypot(|dx|, |dy|) by offset, -1: not computed yet
+  // hypot(|dx|, |dy|) by offset, 0: not computed yet (hypot(0, 0) is 0, so
+  // computing it again is harmless). Zeroed by calloc rather than filled: a
+  // table this large (0.4 MB for a 10 x 8 m grid) is mmap'ed, and pages of it
+  // no search reads or writes are never made resident (a search touches the
+  // offsets from its goal to the cells it visits; issue 15's RSS budget).
+  struct Free {
+    void operator()(double* p) const { std::free(p); }
+  };
+  std::unique_ptr<double[], Free> hypot_;
   int hypot_nx_ = 0, hypot_ny_ = 0;
   // The last failed search: from this start cell on this clearance grid, the
   // cells with a finite g_ were all that can be reached.
