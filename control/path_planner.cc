@@ -204,9 +204,13 @@ void PathPlanner::GrowHypot(int nx, int ny) {
   const int new_nx = std::max(nx + nx / 4, hypot_nx_), new_ny = std::max(ny + ny / 4, hypot_ny_);
   LazyArray<double> grown;
   grown.Reserve(static_cast<size_t>(new_nx) * static_cast<size_t>(new_ny));
+  // Only the distances computed are copied: the rest of the new table stays
+  // untouched (reading the old one's untouched pages makes nothing resident).
   for (int ay = 0; ay < hypot_ny_; ++ay) {
-    std::copy_n(hypot_.p.get() + static_cast<std::ptrdiff_t>(ay) * hypot_nx_, hypot_nx_,
-                grown.p.get() + static_cast<std::ptrdiff_t>(ay) * new_nx);
+    for (int ax = 0; ax < hypot_nx_; ++ax) {
+      const double h = hypot_[static_cast<size_t>(ay) * static_cast<size_t>(hypot_nx_) + static_cast<size_t>(ax)];
+      if (h != 0) grown[static_cast<size_t>(ay) * static_cast<size_t>(new_nx) + static_cast<size_t>(ax)] = h;
+    }
   }
   hypot_ = std::move(grown);
   hypot_nx_ = new_nx;

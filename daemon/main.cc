@@ -16,6 +16,13 @@ int main(int argc, char** argv) {
   // their own (~0.5 MB resident at the end of a mission, measured), and their
   // allocation rate is far too low to contend (issue 15's RSS budget).
   ::mallopt(M_ARENA_MAX, 1);
+  // Blocks of 128 KB and more always mmap'ed, returned to the kernel when
+  // freed. Left to glibc, the threshold rises to the largest such block freed
+  // (a map's encoded text, ~0.1-0.3 MB): from then on those blocks come from
+  // the heap and leave it fragmented, and a calloc'ed table (the planner's
+  // distances, control/path_planner.h) is memset page by page instead of
+  // staying untouched where unused (issue 15's RSS budget).
+  ::mallopt(M_MMAP_THRESHOLD, 128 * 1024);
   CLI::App app{"irslamd: line-feature SLAM and exploration for a robot with IR range sensors"};
   irslam::DaemonOptions options;
   bool print_config = false;
