@@ -1,6 +1,6 @@
 // The boustrophedon cell decomposition of control/coverage.h (Decompose) and a
-// cell's own geometry (area, outline); the sweep of a cell, the plan and the
-// covered-floor grid are in coverage.cc.
+// cell's own geometry (area, outline); the sweep of a cell and the covered-floor
+// grid are in coverage.cc, the plan (the cells' tour) in coverage_plan.cc.
 #include "control/coverage.h"
 
 #include <algorithm>
