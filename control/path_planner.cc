@@ -132,35 +132,33 @@ bool SameObstacles(const std::vector<Obstacle>& a, const std::vector<Obstacle>& 
 // values, so the table by |dx|, |dy| gives the same numbers), computed once.
 double PathPlanner::H(int dx, int dy) {
   const int ax = std::abs(dx), ay = std::abs(dy);
-  double& h = hypot_[static_cast<size_t>(ay * hypot_nx_ + ax)];
+  double& h = hypot_[Tiled(ax, ay, hypot_tiles_x_)];
   if (h == 0) h = std::hypot(dx, dy);  // (0 at 0, 0 is recomputed: also 0)
   return h;
 }
 
 // A* (8-connected) from cell s_ = (sx_, sy_) to goal_i_ = (gx_, gy_): each
-// cell's predecessor in from_ (-1: none), its cost in g_. The same search as
-// ever; the open list is a binary heap of (f, cell) ordered like
-// std::priority_queue's (std::push_heap / pop_heap with std::greater), so cells
-// come off it in the same order. Runs at most max_pops pops; true once the
+// cell's predecessor and cost in cells_ (From, G). The same search as
+// ever; the open list (control/quad_heap.h) gives up its (f, cell) pairs in
+// the order std::priority_queue with std::greater did, so cells come off it in
+// the same order. Runs at most max_pops pops; true once the
 // search has ended (the goal popped or the queue empty).
 bool PathPlanner::SearchSome(int64_t max_pops, int64_t* pops) {
   const PlannerOptions& o = o_;
   const int nx = geo_.nx, ny = geo_.ny;
   const int sx = sx_, sy = sy_, gx = gx_, gy = gy_, goal_i = goal_i_;
-  const auto cmp = std::greater<>();
   const auto h = [&](int i) { return H(i % nx - gx, i / nx - gy); };
   const int dx[8] = {1, -1, 0, 0, 1, 1, -1, -1}, dy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
   for (int64_t popped = 0; !open_.empty(); ++popped) {
     if (popped >= max_pops) return false;
-    std::pop_heap(open_.begin(), open_.end(), cmp);
-    const auto [f, i] = open_.back();
-    open_.pop_back();
+    const auto [f, i] = open_.pop();
     ++stats_.pops;
     ++search_pops_;
     ++*pops;
     if (i == goal_i) return true;
-    if (f > G(i) + h(i) + 1e-9) continue;
     const int ix = i % nx, iy = i / nx;
+    const double gi = G(ix, iy);
+    if (f > gi + h(i) + 1e-9) continue;
     for (int k = 0; k < 8; ++k) {
       const int jx = ix + dx[k], jy = iy + dy[k];
       if (jx < 0 || jy < 0 || jx >= nx || jy >= ny) continue;
@@ -173,13 +171,11 @@ bool PathPlanner::SearchSome(int64_t max_pops, int64_t* pops) {
         if (H(jx - sx, jy - sy) * o.resolution_m > o.inflation_m + o.resolution_m) continue;
         if (cj < o.hard_m && cj < clear_[static_cast<size_t>(i)]) continue;
       }
-      const double c = G(i) + (k < 4 ? 1.0 : M_SQRT2);
-      if (c < G(j)) {
-        stamp_[static_cast<size_t>(j)] = gen_;
-        g_[static_cast<size_t>(j)] = c;
-        from_[static_cast<size_t>(j)] = i;
-        open_.push_back({c + h(j), j});
-        std::push_heap(open_.begin(), open_.end(), cmp);
+      const double c = gi + (k < 4 ? 1.0 : M_SQRT2);
+      CellState& cj_state = Cell(jx, jy);
+      if (c < (cj_state.stamp == gen_ ? cj_state.g : 1e18)) {
+        cj_state = {c, i, gen_};
+        open_.push({c + h(j), j});
       }
     }
   }
@@ -202,19 +198,21 @@ void PathPlanner::GrowHypot(int nx, int ny) {
   // Grown with slack, the distances computed so far kept: a grid a cell
   // larger (the robot moved, a line grew) neither reallocates nor recomputes.
   const int new_nx = std::max(nx + nx / 4, hypot_nx_), new_ny = std::max(ny + ny / 4, hypot_ny_);
+  const int new_tiles_x = Tiles(new_nx);
   LazyArray<double> grown;
-  grown.Reserve(static_cast<size_t>(new_nx) * static_cast<size_t>(new_ny));
+  grown.Reserve(static_cast<size_t>(new_tiles_x) * static_cast<size_t>(Tiles(new_ny)) << (2 * kTileBits));
   // Only the distances computed are copied: the rest of the new table stays
   // untouched (reading the old one's untouched pages makes nothing resident).
   for (int ay = 0; ay < hypot_ny_; ++ay) {
     for (int ax = 0; ax < hypot_nx_; ++ax) {
-      const double h = hypot_[static_cast<size_t>(ay) * static_cast<size_t>(hypot_nx_) + static_cast<size_t>(ax)];
-      if (h != 0) grown[static_cast<size_t>(ay) * static_cast<size_t>(new_nx) + static_cast<size_t>(ax)] = h;
+      const double h = hypot_[Tiled(ax, ay, hypot_tiles_x_)];
+      if (h != 0) grown[Tiled(ax, ay, new_tiles_x)] = h;
     }
   }
   hypot_ = std::move(grown);
   hypot_nx_ = new_nx;
   hypot_ny_ = new_ny;
+  hypot_tiles_x_ = new_tiles_x;
 }
 
 PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
@@ -263,31 +261,27 @@ PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
   }
   const int s = sy * nx + sx, goal_i = gy * nx + gx;
   if (failed_valid_ && failed_start_ == s && failed_hard_m_ == o.hard_m &&
-      G(goal_i) >= 1e18) {
+      G(gx, gy) >= 1e18) {
     // The last search from here visited every cell that can be reached: not this one.
     ++stats_.failed;
     ++stats_.known_unreachable;
     return Progress::kFailed;
   }
   ++stats_.searches;
-  failed_valid_ = false;  // g_ is about to be overwritten
+  failed_valid_ = false;  // the costs are about to be overwritten
   sx_ = sx, sy_ = sy, gx_ = gx, gy_ = gy, s_ = s, goal_i_ = goal_i;
   o_ = o;
   start_ = start;
   goal_ = goal;
-  const size_t n = static_cast<size_t>(nx) * static_cast<size_t>(ny);
-  g_.Reserve(n);
-  from_.Reserve(n);
-  stamp_.Reserve(n);
+  tiles_x_ = Tiles(nx);
+  cells_.Reserve(static_cast<size_t>(tiles_x_) * static_cast<size_t>(Tiles(ny)) << (2 * kTileBits));
   if (++gen_ == 0) {  // wrapped: no stamp may look current
-    std::fill_n(stamp_.p.get(), stamp_.n, 0u);
+    for (size_t k = 0; k < cells_.n; ++k) cells_[k].stamp = 0;
     gen_ = 1;
   }
   open_.clear();
-  stamp_[static_cast<size_t>(s)] = gen_;
-  g_[static_cast<size_t>(s)] = 0;
-  from_[static_cast<size_t>(s)] = -1;
-  open_.push_back({H(sx - gx, sy - gy), s});
+  Cell(sx, sy) = {0, -1, gen_};
+  open_.push({H(sx - gx, sy - gy), s});
   search_pops_ = 0;
   running_ = true;
   return Progress::kRunning;

@@ -1,8 +1,13 @@
 // GoTo: planning, pure pursuit, escape from contacts and giving the goal up,
 // with a robot that does not move (the SLAM state stays at the origin).
 #include "control/go_to.h"
+#include "control/quad_heap.h"
 
 #include <gtest/gtest.h>
+
+#include <functional>
+#include <queue>
+#include <random>
 
 #include "robot/robot_core.h"
 
@@ -207,6 +212,38 @@ TEST(PathPlannerTest, ASearchRunInPiecesIsTheOneShotSearch) {
     ASSERT_EQ(p, PathPlanner::Progress::kFound) << goal.transpose();
     ASSERT_EQ(planner.path().size(), one_shot->size());
     for (size_t i = 0; i < one_shot->size(); ++i) EXPECT_EQ(planner.path()[i], (*one_shot)[i]) << i;
+  }
+}
+
+// Issue 15: the planner's open list gives up its pairs in exactly the order
+// std::priority_queue with std::greater does (the search depends on it), with
+// many equal keys, equal pairs, and pushes between pops as A* makes them.
+TEST(QuadHeapTest, PopsInThePriorityQueuesOrder) {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> key(0, 40), id(0, 30), op(0, 2);
+  for (int round = 0; round < 50; ++round) {
+    QuadHeap heap;
+    std::priority_queue<QuadHeap::Entry, std::vector<QuadHeap::Entry>, std::greater<>> reference;
+    int pops = 0;
+    for (int step = 0; step < 2000; ++step) {
+      if (op(rng) > 0 || reference.empty()) {
+        const QuadHeap::Entry e{0.5 * key(rng) + (round % 2 ? M_SQRT2 : 0.0), id(rng)};
+        heap.push(e);
+        reference.push(e);
+      } else {
+        ASSERT_EQ(heap.pop(), reference.top()) << "round " << round << " step " << step;
+        reference.pop();
+        ++pops;
+      }
+      ASSERT_EQ(heap.size(), reference.size());
+    }
+    while (!reference.empty()) {
+      ASSERT_EQ(heap.pop(), reference.top());
+      reference.pop();
+      ++pops;
+    }
+    EXPECT_TRUE(heap.empty());
+    EXPECT_GT(pops, 1000);
   }
 }
 
