@@ -27,6 +27,8 @@ options::Table<GoToOptions> GoToKeys() {
        "... once this many plans in a row failed (before, every period)"},
       {"plan_pops_per_period", &O::plan_pops_per_period, 0, 100000000, "",
        "A* queue pops per control period at most; a longer search goes on in the next periods (0: no bound)"},
+      {"plan_cells_per_pop", &O::plan_cells_per_pop, 0, 100000, "",
+       "clearance cells a plan computes that count as one pop against that budget (0: not counted)"},
       {"front_stop_m", &O::front_stop_m, 0.1, 2, "m",
        "something this close ahead: stop and plan around it"},
       {"go_to_timeout_s", &O::go_to_timeout_s, 1, 3600, "s",
@@ -133,6 +135,7 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
     obstacles.push_back({l.p0 - o.line_extension_m * d, l.p1 + o.line_extension_m * d});
   }
   for (const auto& b : bumps.points()) obstacles.push_back({b, b});
+  const size_t n_static = obstacles.size();
   // What the IR sensors see now, mapped or not.
   const Pose2 me = slam.pose();
   for (int i = 0; i < kNumIrSensors; ++i) {
@@ -148,8 +151,9 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
   po.hard_m = radius_m_ + o.hard_clearance_m;
   plan_from_ = {me.x, me.y};
   const int64_t t0 = clock_ ? clock_() : 0;
-  const PathPlanner::Progress p = planner_.Start(obstacles, plan_from_, p1_, po);
+  const PathPlanner::Progress p = planner_.Start(obstacles, plan_from_, p1_, po, n_static);
   if (clock_) planning_ns_ += clock_() - t0;
+  if (o.plan_cells_per_pop > 0) *Budget(t) -= planner_.start_cells() / o.plan_cells_per_pop;
   return p == PathPlanner::Progress::kRunning ? ContinuePlan(t) : Ended(p);
 }
 

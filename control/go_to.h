@@ -47,6 +47,11 @@ struct GoToOptions {
   // (docs/benchmarks.md: 66 paper-world runs unchanged, the campaign no worse
   // in any row; 5,000 changed the free_start runs).
   int plan_pops_per_period = 7000;
+  // A plan's clearance grid counts against that budget: this many cells
+  // computed cost one pop (a pop ~0.1 us, a cell ~1.5 ns here), so a period
+  // that computes a large room's grid (181,000 cells in a 16 x 12 m hall) runs
+  // fewer pops. 0: not counted.
+  int plan_cells_per_pop = 64;
   double front_stop_m = 0.32;   // unmapped obstacle ahead: stop, replan
   double go_to_timeout_s = 90;  // give the goal up if not reached by then
   double go_to_stuck_s = 25;    // ... or if the robot got no go_to_progress_m further for this long

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <functional>
 #include <limits>
+#include <span>
 
 namespace irslam::control {
 namespace {
@@ -93,15 +94,16 @@ std::pair<int, int> RowSpan(const Obstacle& o, const Grid& grid, int iy, double 
 }
 
 // Clearance of each cell: the distance to the nearest obstacle, up to the
-// inflation. Each obstacle visits the cells of its bounding box row by row,
+// inflation (*out holds the clearances so far, lowered here where these
+// obstacles are nearer). Each obstacle visits the cells of its bounding box row by row,
 // only where the row can come within the inflation (RowSpan): the same minimum
 // as over the whole box (a cell farther off keeps the inflation either way),
 // without the distance of every cell of a long diagonal wall's box.
-void Clearances(const std::vector<Obstacle>& obstacles, const Grid& grid, double inflation_m,
-                std::vector<float>* out) {
+int64_t AddClearances(std::span<const Obstacle> obstacles, const Grid& grid, double inflation_m,
+                      std::vector<float>* out) {
+  int64_t cells = 0;
   const int nx = grid.nx, ny = grid.ny;
   std::vector<float>& clear = *out;
-  clear.assign(static_cast<size_t>(nx * ny), static_cast<float>(inflation_m));
   for (const auto& ob : obstacles) {
     // Only cells near the obstacle's bounding box can be blocked by it.
     const Eigen::Vector2d a = ob.a.cwiseMin(ob.b).array() - inflation_m;
@@ -110,15 +112,18 @@ void Clearances(const std::vector<Obstacle>& obstacles, const Grid& grid, double
     const auto [x1, y1] = grid.Cell(b);
     for (int iy = std::max(0, y0); iy <= std::min(ny - 1, y1); ++iy) {
       const auto [s0, s1] = RowSpan(ob, grid, iy, inflation_m);
-      for (int ix = std::max({0, x0, s0}); ix <= std::min({nx - 1, x1, s1}); ++ix) {
+      const int lo = std::max({0, x0, s0}), hi = std::min({nx - 1, x1, s1});
+      for (int ix = lo; ix <= hi; ++ix) {
         auto& c = clear[static_cast<size_t>(iy * nx + ix)];
         c = std::min(c, static_cast<float>(SegmentDistance(grid.Centre(ix, iy), ob)));
       }
+      cells += std::max(0, hi - lo + 1);
     }
   }
+  return cells;
 }
 
-bool SameObstacles(const std::vector<Obstacle>& a, const std::vector<Obstacle>& b) {
+bool SameObstacles(std::span<const Obstacle> a, const std::vector<Obstacle>& b) {
   if (a.size() != b.size()) return false;
   for (size_t i = 0; i < a.size(); ++i) {
     if (a[i].a != b[i].a || a[i].b != b[i].b) return false;
@@ -215,11 +220,66 @@ void PathPlanner::GrowHypot(int nx, int ny) {
   hypot_tiles_x_ = new_tiles_x;
 }
 
+// The clearances: those of the static obstacles (the first n_static) kept
+// while they and the grid are the same, the transient ones (what the sensors
+// see now) added to a copy. The minimum over all obstacles, as one pass over
+// them all gives it, number for number. A grid first made for new static
+// obstacles is made in one pass over all of them; the static part alone is
+// made (and kept) at the next call that needs it, so that a new grid's page
+// faults fall in two calls, not one. start_cells_ counts the work: the cells
+// filled and evaluated, and twice the cells newly allocated (a fresh page
+// costs about as much as computing its cells twice over).
+void PathPlanner::UpdateClearances(const std::vector<Obstacle>& obstacles, size_t n_static,
+                                   const Geometry& geo, double inflation_m) {
+  Grid grid;
+  grid.lo = geo.lo;
+  grid.res = geo.res;
+  grid.nx = geo.nx;
+  grid.ny = geo.ny;
+  const size_t n = static_cast<size_t>(geo.nx) * static_cast<size_t>(geo.ny);
+  const float fill = static_cast<float>(inflation_m);
+  const auto fresh = [&](const std::vector<float>& v) {
+    return n > v.capacity() ? 2 * static_cast<int64_t>(n - v.capacity()) : 0;
+  };
+  const size_t n_fixed = std::min(n_static, obstacles.size());
+  const std::span<const Obstacle> fixed(obstacles.data(), n_fixed);
+  const std::span<const Obstacle> transient(obstacles.data() + n_fixed, obstacles.size() - n_fixed);
+  const bool same_fixed = geo == geo_ && clear_inflation_m_ == inflation_m && SameObstacles(fixed, obstacles_);
+  if (same_fixed && SameObstacles(transient, transient_)) {
+    ++stats_.clearance_reused;
+    return;
+  }
+  failed_valid_ = false;
+  transient_.assign(transient.begin(), transient.end());
+  if (!same_fixed) {
+    geo_ = geo;
+    clear_inflation_m_ = inflation_m;
+    obstacles_.assign(fixed.begin(), fixed.end());
+    fixed_valid_ = false;
+    start_cells_ += fresh(clear_) + static_cast<int64_t>(n);
+    clear_.assign(n, fill);
+    start_cells_ += AddClearances(obstacles, grid, inflation_m, &clear_);
+    return;
+  }
+  if (fixed_valid_) {
+    ++stats_.static_clearance_reused;
+  } else {
+    start_cells_ += fresh(fixed_clear_) + static_cast<int64_t>(n);
+    fixed_clear_.assign(n, fill);
+    start_cells_ += AddClearances(fixed, grid, inflation_m, &fixed_clear_);
+    fixed_valid_ = true;
+  }
+  start_cells_ += fresh(clear_);
+  clear_ = fixed_clear_;
+  start_cells_ += AddClearances(transient, grid, inflation_m, &clear_);
+}
+
 PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
                                          const Eigen::Vector2d& start, const Eigen::Vector2d& goal,
-                                         const PlannerOptions& o) {
+                                         const PlannerOptions& o, size_t n_static) {
   ++stats_.plans;
   running_ = false;
+  start_cells_ = 0;
   Eigen::Vector2d lo = start.cwiseMin(goal), hi = start.cwiseMax(goal);
   for (const auto& ob : obstacles) {
     lo = lo.cwiseMin(ob.a).cwiseMin(ob.b);
@@ -242,15 +302,7 @@ PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
   grid.res = geo.res;
   grid.nx = nx;
   grid.ny = ny;
-  if (geo == geo_ && clear_inflation_m_ == o.inflation_m && SameObstacles(obstacles, obstacles_)) {
-    ++stats_.clearance_reused;
-  } else {
-    geo_ = geo;
-    clear_inflation_m_ = o.inflation_m;
-    obstacles_ = obstacles;
-    Clearances(obstacles, grid, o.inflation_m, &clear_);
-    failed_valid_ = false;
-  }
+  UpdateClearances(obstacles, n_static, geo, o.inflation_m);
   GrowHypot(nx, ny);
   const auto [sx, sy] = grid.Cell(start);
   const auto [gx, gy] = grid.Cell(goal);

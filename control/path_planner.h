@@ -70,11 +70,18 @@ class PathPlanner {
   // Starts a search (abandoning any search still running); kFound or kFailed
   // when it is answered without one (a goal off the grid or blocked, or known
   // unreachable).
+  // The first n_static obstacles are static (mapped sides, contacts): their
+  // clearance grid is kept while they are the same, and the rest (what the
+  // sensors see now) is added to a copy of it.
   Progress Start(const std::vector<Obstacle>& obstacles, const Eigen::Vector2d& start,
-                 const Eigen::Vector2d& goal, const PlannerOptions& options);
+                 const Eigen::Vector2d& goal, const PlannerOptions& options,
+                 size_t n_static = static_cast<size_t>(-1));
   // Runs the search started for at most max_pops pops (adds them to *pops).
   Progress Continue(int64_t max_pops, int64_t* pops);
   bool running() const { return running_; }
+  // The clearance cells the last Start computed (filled, or the distance to
+  // an obstacle evaluated): its work, bar the search.
+  int64_t start_cells() const { return start_cells_; }
   // The path found by the last search that ended kFound.
   const std::vector<Eigen::Vector2d>& path() const { return path_; }
   struct Stats {
@@ -83,6 +90,7 @@ class PathPlanner {
     uint64_t failed = 0;        // calls that found no path
     uint64_t known_unreachable = 0;  // ... answered from the last failed search
     uint64_t clearance_reused = 0;   // calls that reused the clearance grid
+    uint64_t static_clearance_reused = 0;  // ... that reused only the static obstacles' part
     uint64_t pops = 0;          // A* queue pops, all searches
     uint64_t max_pops = 0;      // ... the longest search's
   };
@@ -101,12 +109,18 @@ class PathPlanner {
   bool SearchSome(int64_t max_pops, int64_t* pops);  // true once it has ended
   Progress Finish();
   double H(int dx, int dy);
+  void UpdateClearances(const std::vector<Obstacle>& obstacles, size_t n_static, const Geometry& geo,
+                        double inflation_m);
   void GrowHypot(int nx, int ny);
 
   Geometry geo_;
-  std::vector<Obstacle> obstacles_;  // what clear_ was made from
+  std::vector<Obstacle> obstacles_;   // the static obstacles fixed_clear_ was made from
+  std::vector<Obstacle> transient_;   // ... and the transient ones clear_ adds
   double clear_inflation_m_ = -1;
-  std::vector<float> clear_;
+  std::vector<float> fixed_clear_;    // the static obstacles' clearances (if fixed_valid_)
+  bool fixed_valid_ = false;
+  std::vector<float> clear_;          // all obstacles'
+
   // Per cell, valid where its stamp holds the search's number gen_ (so a search
   // starts without filling them): its cost and predecessor. The arrays come
   // from calloc, whose large blocks are pages the kernel supplies as they are
@@ -172,6 +186,7 @@ class PathPlanner {
   Stats stats_;
   bool running_ = false;
   uint64_t search_pops_ = 0;  // the search in progress so far
+  int64_t start_cells_ = 0;
   int s_ = 0, goal_i_ = 0, sx_ = 0, sy_ = 0, gx_ = 0, gy_ = 0;
   PlannerOptions o_;
   Eigen::Vector2d start_ = Eigen::Vector2d::Zero(), goal_ = Eigen::Vector2d::Zero();

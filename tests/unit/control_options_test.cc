@@ -64,9 +64,9 @@ std::map<std::string, Seen> AllKeys() {
 
 TEST(ControlOptionsTest, TablesAreConsistent) {
   const auto keys = AllKeys();
-  // mission: 7 + mode; go-to: 36 (plan_pops_per_period); model: 6 (same_size_m); cleaning: 26;
+  // mission: 7 + mode; go-to: 37 (plan_pops_per_period, plan_cells_per_pop); model: 6 (same_size_m); cleaning: 26;
   // relocalize: 8 + 7 (moved furniture).
-  EXPECT_EQ(keys.size(), 13u + 8 + 5 + 6 + 36 + 2 + 6 + 13 + 6 + 26 + 8 + 7);
+  EXPECT_EQ(keys.size(), 13u + 8 + 5 + 6 + 37 + 2 + 6 + 13 + 6 + 26 + 8 + 7);
 }
 
 // The keys config.cc read before the tables, with their bounds.

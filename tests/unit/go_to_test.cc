@@ -215,6 +215,45 @@ TEST(PathPlannerTest, ASearchRunInPiecesIsTheOneShotSearch) {
   }
 }
 
+// Issue 15: the static obstacles' clearances are kept while only what the
+// sensors see changes, and the transient points are added to a copy: the
+// paths are the ones a planner computing everything afresh finds. The work a
+// Start reports (the cells it computed) is the whole grid when the static
+// obstacles are new or first kept, and a small part of it once they are reused.
+TEST(PathPlannerTest, KeepsTheStaticClearancesAndAddsWhatTheSensorsSee) {
+  PlannerOptions po;
+  po.inflation_m = 0.25;
+  po.hard_m = 0.19;
+  const std::vector<Obstacle> walls = {{{0, 0}, {4, 0}}, {{4, 0}, {4, 3}}, {{4, 3}, {0, 3}}, {{0, 3}, {0, 0}},
+                                       {{1.5, 1}, {2.5, 1}}, {{2.5, 1}, {2.5, 2}}};
+  const Eigen::Vector2d start(0.5, 0.5), goal(3.5, 2.5);
+  PathPlanner planner;
+  const int64_t cells = static_cast<int64_t>((4 + 2 * po.margin_m) / po.resolution_m) *
+                        static_cast<int64_t>((3 + 2 * po.margin_m) / po.resolution_m);
+  int k = 0;
+  for (const Eigen::Vector2d& seen : {Eigen::Vector2d(3.0, 1.5), Eigen::Vector2d(3.0, 1.6), Eigen::Vector2d(3.2, 2.0),
+                                      Eigen::Vector2d(1.0, 2.0)}) {
+    std::vector<Obstacle> all = walls;
+    all.push_back({seen, seen});
+    const auto fresh = PlanPath(all, start, goal, po);
+    ASSERT_TRUE(fresh) << k;
+    PathPlanner::Progress p = planner.Start(all, start, goal, po, walls.size());
+    if (k < 2) {
+      EXPECT_GT(planner.start_cells(), cells) << k;  // the whole grid: all obstacles, then the static part
+    } else {
+      EXPECT_LT(planner.start_cells(), cells / 10) << k;  // only the point's cells
+    }
+    int64_t pops = 0;
+    if (p == PathPlanner::Progress::kRunning) p = planner.Continue(1 << 30, &pops);
+    ASSERT_EQ(p, PathPlanner::Progress::kFound) << k;
+    ASSERT_EQ(planner.path().size(), fresh->size()) << k;
+    for (size_t i = 0; i < fresh->size(); ++i) EXPECT_EQ(planner.path()[i], (*fresh)[i]) << k << " " << i;
+    ++k;
+  }
+  EXPECT_EQ(planner.stats().static_clearance_reused, 2u);
+  EXPECT_EQ(planner.stats().clearance_reused, 0u);
+}
+
 // Issue 15: the planner's open list gives up its pairs in exactly the order
 // std::priority_queue with std::greater does (the search depends on it), with
 // many equal keys, equal pairs, and pushes between pops as A* makes them.
@@ -251,6 +290,32 @@ TEST(QuadHeapTest, PopsInThePriorityQueuesOrder) {
 // accepted; the robot holds still while the search goes on in the next
 // periods, then drives the path; an unreachable one is given up once its
 // search has ended.
+// Issue 15: the clearance grid a plan computes counts against the period's
+// pop budget (plan_cells_per_pop): the same search that ends in the period it
+// starts when the grid is not counted waits for the next periods when the
+// grid's cells use the budget up.
+TEST(GoToTest, APlansClearanceGridCountsAgainstThePeriodsBudget) {
+  Rig r;
+  GoToOptions o;
+  o.plan_pops_per_period = 1000;
+  o.plan_cells_per_pop = 0;
+  GoTo free_grid(o, r.o.slam.geometry, r.o.slam.mounts);
+  ASSERT_TRUE(free_grid.TryGoal(0, {2, 0}, 0, true, r.slam, r.bumps));
+  EXPECT_FALSE(free_grid.path().empty());  // found in this period
+  o.plan_cells_per_pop = 1;  // a 4 x 2 m grid: ~3,300 cells, over the budget
+  GoTo counted(o, r.o.slam.geometry, r.o.slam.mounts);
+  ASSERT_TRUE(counted.TryGoal(0, {2, 0}, 0, true, r.slam, r.bumps));
+  EXPECT_TRUE(counted.path().empty());  // not yet
+  counted.Begin(0);
+  free_grid.Begin(0);
+  const GoTo::Result res = counted.Step(0.02, r.slam, RangeScan{}, 0, r.bumps, r.follower);
+  EXPECT_EQ(res.status, GoTo::Status::kDriving);
+  ASSERT_FALSE(counted.path().empty());  // the next period's budget is the search's
+  free_grid.Step(0.02, r.slam, RangeScan{}, 0, r.bumps, r.follower);  // (the path as driven from then)
+  ASSERT_EQ(counted.path().size(), free_grid.path().size());
+  for (size_t i = 0; i < counted.path().size(); ++i) EXPECT_EQ(counted.path()[i], free_grid.path()[i]);
+}
+
 TEST(GoToTest, ASearchLongerThanThePeriodsBudgetGoesOnInTheNextPeriodsTheRobotHoldingStill) {
   Rig r;
   GoToOptions o;
