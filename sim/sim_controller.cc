@@ -66,16 +66,19 @@ void SimController::Teleport(const Pose2& p) {
 }
 
 double SimController::Clearance(const Pose2& p, uint8_t* bumpers) const {
-  double best = 1e9;
+  // The nearest side by squared distance (hypot, a libm call, only for the
+  // nearest: this runs twice per physics step over every side).
+  double best2 = 1e18;
   Vec2 contact{};
   for (const Segment& s : segments_) {
-    Vec2 c;
-    const double d = PointSegmentDistance({p.x, p.y}, s, &c);
-    if (d < best) {
-      best = d;
+    const Vec2 c = ClosestOnSegment({p.x, p.y}, s);
+    const double dx = p.x - c.x, dy = p.y - c.y, d2 = dx * dx + dy * dy;
+    if (d2 < best2) {
+      best2 = d2;
       contact = c;
     }
   }
+  const double best = segments_.empty() ? 1e9 : std::hypot(p.x - contact.x, p.y - contact.y);
   if (bumpers) {
     *bumpers = 0;
     if (best < options_.geometry.radius_m + 0.003) {

@@ -274,12 +274,16 @@ std::optional<double> RayCast(const std::vector<Segment>& segs, Vec2 p, double a
   return best;
 }
 
-double PointSegmentDistance(Vec2 p, const Segment& s, Vec2* closest) {
+Vec2 ClosestOnSegment(Vec2 p, const Segment& s) {
   const double ex = s.b.x - s.a.x, ey = s.b.y - s.a.y;
   const double len2 = ex * ex + ey * ey;
   double u = len2 > 0 ? ((p.x - s.a.x) * ex + (p.y - s.a.y) * ey) / len2 : 0;
   u = std::clamp(u, 0.0, 1.0);
-  const Vec2 c{s.a.x + u * ex, s.a.y + u * ey};
+  return {s.a.x + u * ex, s.a.y + u * ey};
+}
+
+double PointSegmentDistance(Vec2 p, const Segment& s, Vec2* closest) {
+  const Vec2 c = ClosestOnSegment(p, s);
   if (closest) *closest = c;
   return std::hypot(p.x - c.x, p.y - c.y);
 }

@@ -75,6 +75,8 @@ std::optional<double> RayCast(const std::vector<Segment>& segs, Vec2 p, double a
                               double max_range, size_t* hit = nullptr);
 // Distance from a point to a segment.
 double PointSegmentDistance(Vec2 p, const Segment& s, Vec2* closest);
+// The point of the segment nearest p (the one PointSegmentDistance measures to).
+Vec2 ClosestOnSegment(Vec2 p, const Segment& s);
 
 }  // namespace irslam::sim
 
