@@ -231,11 +231,7 @@ void PathPlanner::GrowHypot(int nx, int ny) {
 // costs about as much as computing its cells twice over).
 void PathPlanner::UpdateClearances(const std::vector<Obstacle>& obstacles, size_t n_static,
                                    const Geometry& geo, double inflation_m) {
-  Grid grid;
-  grid.lo = geo.lo;
-  grid.res = geo.res;
-  grid.nx = geo.nx;
-  grid.ny = geo.ny;
+  const Grid grid{geo.lo, geo.nx, geo.ny, geo.res};
   const size_t n = static_cast<size_t>(geo.nx) * static_cast<size_t>(geo.ny);
   const float fill = static_cast<float>(inflation_m);
   const auto fresh = [&](const std::vector<float>& v) {
@@ -297,12 +293,8 @@ PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
     ++stats_.failed;
     return Progress::kFailed;
   }
-  Grid grid;
-  grid.lo = geo.lo;
-  grid.res = geo.res;
-  grid.nx = nx;
-  grid.ny = ny;
   UpdateClearances(obstacles, n_static, geo, o.inflation_m);
+  const Grid grid{geo.lo, nx, ny, geo.res};
   GrowHypot(nx, ny);
   const auto [sx, sy] = grid.Cell(start);
   const auto [gx, gy] = grid.Cell(goal);

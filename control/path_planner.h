@@ -153,13 +153,14 @@ class PathPlanner {
     uint32_t stamp;
   };
   static constexpr int kTileBits = 4;  // tiles of 16 x 16
+  static constexpr int kTileMask = (1 << kTileBits) - 1;
   static size_t Tiled(int x, int y, int tiles_x) {
     return ((static_cast<size_t>(y >> kTileBits) * static_cast<size_t>(tiles_x) +
              static_cast<size_t>(x >> kTileBits))
             << (2 * kTileBits)) +
-           static_cast<size_t>(((y & 15) << kTileBits) + (x & 15));
+           static_cast<size_t>(((y & kTileMask) << kTileBits) + (x & kTileMask));
   }
-  static int Tiles(int n) { return (n + 15) >> kTileBits; }
+  static int Tiles(int n) { return (n + kTileMask) >> kTileBits; }
   LazyArray<CellState> cells_;
   int tiles_x_ = 0;  // the grid's width in tiles
   uint32_t gen_ = 0;
