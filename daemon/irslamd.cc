@@ -201,7 +201,10 @@ int Daemon::Run() {
   scheduler_ = PeriodScheduler(scheduler_.period_ns(), Ns(start_));
   OpenRecorder();
   ApplyScheduling(/*log_change=*/false);  // after the threads it starts: they keep normal scheduling
-  ArmTimer();
+  if (!ArmTimer()) {
+    Shutdown();
+    return 1;
+  }
   std::fprintf(stderr, "<6>irslamd: ready can=%s socket=%s period=%.3fs time_scale=%g scheduling=%s\n",
                bus_->name().c_str(), options_.socket_path.c_str(), settings_.core.period_s, options_.time_scale,
                scheduling_.Describe(settings_.realtime_priority).c_str());
@@ -228,13 +231,13 @@ void Daemon::ApplyScheduling(bool log_change) {
   }
 }
 
-void Daemon::ArmTimer() {
-  timer_.expires_at(WallTime(std::chrono::nanoseconds(scheduler_.deadline_ns())));
-  timer_.async_wait([this](const boost::system::error_code& ec) {
-    if (ec || !running_) return;
-    Tick();
-    ArmTimer();
-  });
+bool Daemon::ArmTimer() {
+  std::string error;
+  if (timer_.Start(scheduler_.deadline_ns(), scheduler_.period_ns(), [this] { if (running_) Tick(); }, &error)) {
+    return true;
+  }
+  std::fprintf(stderr, "<3>irslamd: cannot start the control period's timer: %s\n", error.c_str());
+  return false;
 }
 
 void Daemon::Tick() {
@@ -261,7 +264,12 @@ void Daemon::Tick() {
   const int64_t t_core_end = Ns(clock_());
   work[TickPhase::kPlanning] = core_->planning_ns() - planned0;
   work[TickPhase::kMission] = t_core_end - t_core - work[TickPhase::kPlanning];
-  for (const can_frame& f : out) SendFrame(f, now);
+  if (bus_) {
+    if (recorder_) {
+      for (const can_frame& f : out) recorder_->Record(f, now);
+    }
+    bus_->SendNow(out);
+  }
   ApplyOutputs(now);
   const int64_t t_map = Ns(clock_());
   OnStateChange(now);  // the model's save: built and handed to the writer
@@ -330,7 +338,7 @@ int Daemon::Shutdown() {
     std::fprintf(stderr, "<3>irslamd: the final map save failed: exit status 1\n");
     exit_status_ = 1;
   }
-  timer_.cancel();
+  timer_.Cancel();
   signals_.cancel();
   if (api_) api_->Close();
   if (bus_) bus_->Close();

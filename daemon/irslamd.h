@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/signal_set.hpp>
-#include <boost/asio/steady_timer.hpp>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -28,6 +27,7 @@
 #include "daemon/foreign_commander.h"
 #include "daemon/map_service.h"
 #include "daemon/period_scheduler.h"
+#include "daemon/period_timer.h"
 #include "daemon/realtime.h"
 #include "daemon/rpc_methods.h"
 #include "daemon/sd_notifier.h"
@@ -119,7 +119,7 @@ class Daemon : public ApiServer::Dispatcher {
   void Stop(const rpc::Request& req, Reply reply);
   nlohmann::json StopReply(const nlohmann::json& id, SaveResult saved);
   void OnMapWritten(SaveResult result);  // the map writer's outcome, on the loop
-  void ArmTimer();
+  bool ArmTimer();  // false (logged) if the kernel refused the timer
   void OnSignal(int signo);
   void WaitSignal();
   // A frame drained from the bus at the start of a period (rx_realtime_s: its
@@ -160,7 +160,7 @@ class Daemon : public ApiServer::Dispatcher {
   std::unique_ptr<drivers::CanBus> bus_;
   std::unique_ptr<ApiServer> api_;
   std::unique_ptr<drivers::Gpio> gpio_;
-  boost::asio::steady_timer timer_;
+  PeriodTimer timer_;
   boost::asio::signal_set signals_;
   PeriodScheduler scheduler_;
   double max_work_s_ = 0;

@@ -55,6 +55,14 @@ class CanBus {
   virtual void Poll() = 0;
   // Queues a frame for transmission; false (and counted) if it could not be sent.
   virtual bool Send(const can_frame& frame) = 0;
+  // Sends these frames, in order, now: what a fixed-period loop sends at the end
+  // of its period (the loopback bus then needs no later turn of the loop to send
+  // them together). False if any could not be sent.
+  virtual bool SendNow(const std::vector<can_frame>& frames) {
+    bool all = true;
+    for (const can_frame& f : frames) all &= Send(f);
+    return all;
+  }
   virtual void Close() = 0;
   virtual const CanStats& stats() const = 0;
   virtual std::string name() const = 0;

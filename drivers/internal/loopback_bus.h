@@ -1,6 +1,7 @@
 #ifndef IRSLAM_DRIVERS_INTERNAL_LOOPBACK_BUS_H_
 #define IRSLAM_DRIVERS_INTERNAL_LOOPBACK_BUS_H_
 
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <boost/asio/posix/stream_descriptor.hpp>
@@ -72,6 +73,7 @@ class LoopbackBus final : public DescriptorBus {
 
   bool Open(std::string* error);
   bool Send(const can_frame& frame) override;
+  bool SendNow(const std::vector<can_frame>& frames) override;
   void Close() override;
   std::string name() const override { return "unix:" + dir_; }
 
@@ -82,6 +84,8 @@ class LoopbackBus final : public DescriptorBus {
   static constexpr size_t kMaxBacklogFrames = 512;
 
   void Drain() override;
+  // One received datagram's frames (msg: its header, for the receive time).
+  void Deliver(const can_frame* batch, size_t bytes, msghdr* msg);
   void Flush();
   void SendBatch(const can_frame* frames, size_t count);
   // sendto() one datagram to one peer: 1 sent, 0 queue full, -1 the peer is gone.
@@ -118,6 +122,8 @@ class SocketCanBus final : public DescriptorBus {
 
  private:
   void Drain() override;
+  // One received frame (msg: its header, for the receive time and drop count).
+  void Deliver(const can_frame& f, size_t bytes, msghdr* msg);
   void HandleErrorFrame(const can_frame& f);
   void SetLink(bool up, const char* why);
 

@@ -90,6 +90,38 @@ TEST_F(LoopbackBusTest, APolledNodeGetsEverythingAtPollWithEachFramesReceiveTime
   EXPECT_EQ(got.size(), 2u);
 }
 
+// A polled node drains in bursts of 8 datagrams (recvmmsg): 10 datagrams (the
+// kernel's default net.unix.max_dgram_qlen), waiting since the last period, all
+// come at one Poll, in order.
+// SendNow sends at once, behind what Send queued earlier in the same turn.
+TEST_F(LoopbackBusTest, APollDrainsMoreDatagramsThanOneBurstAndSendNowKeepsTheOrder) {
+  auto a = Join();
+  std::string error;
+  auto polled = OpenCanBus(io_, {"unix:" + dir_, {}}, &error);
+  ASSERT_NE(polled, nullptr) << error;
+  std::vector<can_frame> got;
+  polled->StartPolled([&](const can_frame& f, double) { got.push_back(f); });
+  for (uint8_t i = 0; i < 10; ++i) {
+    ASSERT_TRUE(a->bus->Send(Frame(0x100, i)));
+    Pump();  // each turn's frames: one datagram
+  }
+  polled->Poll();
+  ASSERT_EQ(got.size(), 10u);
+  for (uint8_t i = 0; i < 10; ++i) EXPECT_EQ(got[i].data[0], i);
+  got.clear();
+  ASSERT_TRUE(a->bus->Send(Frame(0x100, 40)));  // queued for the turn's flush
+  ASSERT_TRUE(a->bus->SendNow({Frame(0x101, 41), Frame(0x102, 42)}));
+  polled->Poll();  // already there: SendNow did not wait for a turn of the loop
+  ASSERT_EQ(got.size(), 3u);
+  EXPECT_EQ(got[0].data[0], 40);
+  EXPECT_EQ(got[1].data[0], 41);
+  EXPECT_EQ(got[2].data[0], 42);
+  Pump();  // the posted flush finds nothing left to send
+  polled->Poll();
+  EXPECT_EQ(got.size(), 3u);
+  EXPECT_EQ(a->bus->stats().tx_frames, 13u);
+}
+
 TEST_F(LoopbackBusTest, EveryFrameReachesEveryOtherNodeOfThree) {
   auto a = Join(), b = Join(), c = Join();
   ASSERT_TRUE(a->bus->Send(Frame(0x100, 1)));
