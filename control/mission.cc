@@ -86,7 +86,10 @@ Mission::Mission(MissionOptions options, WallFollowerOptions wall, ExploreOption
 void Mission::Enter(MissionState s, double t, std::string reason) {
   state_ = s;
   reason_ = std::move(reason);
-  if (s == MissionState::kWallFollow) {
+  // Relocalising follows walls too: from a fresh follower, also when the map
+  // stopped agreeing in the middle of cleaning (the follower was last used
+  // long before, elsewhere; it held the robot still).
+  if (s == MissionState::kWallFollow || s == MissionState::kRelocalize) {
     follower_.Reset();
     follower_.SetOrbitCorners(false);
     loop_.Reset();

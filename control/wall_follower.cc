@@ -96,6 +96,7 @@ void WallFollower::Enter(FollowMode m, double t) {
   mode_ = m;
   mode_since_ = t;
   turned_rad_ = 0;
+  backoff_forward_ = false;
   if (m == FollowMode::kFollow) has_followed_ = true;
 }
 
@@ -161,11 +162,19 @@ Twist WallFollower::StepMode(double t, std::optional<double> front,
     case FollowMode::kBackoff: {
       const double age = t - mode_since_;
       if (age < o.backoff_time_s) {
-        out = {-o.backoff_speed_mps, 0};
+        out = {backoff_forward_ ? o.backoff_speed_mps : -o.backoff_speed_mps, 0};
       } else if (turned_rad_ < o.backoff_turn_rad) {
         out = {0, o.turn_rate_rad_s};
       } else if (!bumped) {
         Enter(has_followed_ ? FollowMode::kFollow : FollowMode::kFind, t);
+      } else {
+        // Still in contact after backing off and turning: the contact is not
+        // ahead (set down against a wall, or wedged), and waiting here held the
+        // robot still for ever. Back off again, the other way.
+        backoff_forward_ = !backoff_forward_;
+        mode_since_ = t;
+        turned_rad_ = 0;
+        out = {backoff_forward_ ? o.backoff_speed_mps : -o.backoff_speed_mps, 0};
       }
       break;
     }

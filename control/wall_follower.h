@@ -92,6 +92,7 @@ class WallFollower {
   double mode_since_ = 0;
   double last_t_ = 0;
   double turned_rad_ = 0;  // rotation accumulated in the current mode
+  bool backoff_forward_ = false;  // this backoff cycle drives forward (still in contact after one)
   bool has_followed_ = false;
   bool steady_ = false;
   bool orbit_corners_ = false;

@@ -253,11 +253,14 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
           << "run " << i << " line " << l.id;
     }
   }
-  // Measured (these seeds): detected in 3 of 4, recovered in 1 of 4 (one
-  // re-commit 2.8 m off). The target is 90 % recovered: not met
-  // (docs/relocalization.md). The floors keep today's rates from dropping.
+  // Measured (these seeds): detected in 3 of 4, recovered in 2 of 4 (1 of 4
+  // before the wall follower stopped waiting with its bumper pressed against
+  // the wall it was put down at; one re-commit 2.1 m off). Over seeds 40-55:
+  // detected 12 of 16, recovered 9 (6 before). The target is 90 %
+  // recovered: not met (docs/relocalization.md). The floors keep today's rates
+  // from dropping.
   EXPECT_GE(detected, 3);
-  EXPECT_GE(recovered, 1);
+  EXPECT_GE(recovered, 2);
 }
 
 TEST(RelocTest, FurnitureMovedHalfAMetreIsDetectedAndKeepsItsId) {

@@ -126,5 +126,39 @@ TEST(WallFollowerTest, BacksOffWhenBumped) {
   EXPECT_LT(t.v, 0);
 }
 
+// Still in contact after backing off and turning (set down against a wall
+// behind it: backing off cannot move it, and the simulator's bumper ring reads
+// a contact at any bearing): the follower backed off again the other way. It
+// used to wait for the bumper to release with the wheels at zero, for ever
+// (a kidnapped robot put down against a wall stood still until the mission's
+// no-progress limit).
+TEST(WallFollowerTest, StillInContactAfterBackingOffBacksOffTheOtherWay) {
+  const auto o = robot::DefaultCoreOptions();
+  WallFollower f(o.wall, o.slam.mounts, 0.17);
+  double t = 0;
+  const double dt = 0.02;
+  // Reverse for backoff_time_s, then turn backoff_turn_rad, the bumper pressed throughout.
+  Twist tw = f.Step(t, RangeScan{}, true);
+  EXPECT_LT(tw.v, 0);
+  bool forward = false;
+  for (int i = 0; i < 1000 && !forward; ++i) {
+    t += dt;
+    tw = f.Step(t, RangeScan{}, true);
+    EXPECT_EQ(f.mode(), FollowMode::kBackoff);
+    EXPECT_FALSE(tw.v == 0 && tw.omega == 0) << "held still at t=" << t;
+    forward = tw.v > 0;
+  }
+  ASSERT_TRUE(forward);
+  // The cycle took the reverse and the turn, then the other way round.
+  EXPECT_GT(t, o.wall.backoff_time_s + o.wall.backoff_turn_rad / o.wall.turn_rate_rad_s - 2 * dt);
+  EXPECT_DOUBLE_EQ(tw.v, o.wall.backoff_speed_mps);
+  // Released: back to finding a wall.
+  for (int i = 0; i < 500 && f.mode() == FollowMode::kBackoff; ++i) {
+    t += dt;
+    f.Step(t, RangeScan{}, false);
+  }
+  EXPECT_EQ(f.mode(), FollowMode::kFind);
+}
+
 }  // namespace
 }  // namespace irslam::control
