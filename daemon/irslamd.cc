@@ -123,6 +123,14 @@ void Daemon::SendFrame(const can_frame& f, double now) {
   if (recorder_) recorder_->Record(f, now);
 }
 
+void Daemon::SendFrames(const std::vector<can_frame>& frames, double now) {
+  if (!bus_) return;
+  bus_->SendNow(frames);
+  if (recorder_) {
+    for (const can_frame& f : frames) recorder_->Record(f, now);
+  }
+}
+
 void Daemon::OpenRecorder() {
   if (!settings_.record.enabled || !bus_) return;
   timespec ts{};
@@ -264,12 +272,7 @@ void Daemon::Tick() {
   const int64_t t_core_end = Ns(clock_());
   work[TickPhase::kPlanning] = core_->planning_ns() - planned0;
   work[TickPhase::kMission] = t_core_end - t_core - work[TickPhase::kPlanning];
-  if (bus_) {
-    if (recorder_) {
-      for (const can_frame& f : out) recorder_->Record(f, now);
-    }
-    bus_->SendNow(out);
-  }
+  SendFrames(out, now);
   ApplyOutputs(now);
   const int64_t t_map = Ns(clock_());
   OnStateChange(now);  // the model's save: built and handed to the writer

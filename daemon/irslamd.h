@@ -132,6 +132,7 @@ class Daemon : public ApiServer::Dispatcher {
   static constexpr double kMaxFrameAgeS = 0.25;
   // Sends a frame (and records it when [record] is on).
   void SendFrame(const can_frame& f, double now);
+  void SendFrames(const std::vector<can_frame>& frames, double now);  // together, now (end of a period)
   void OpenRecorder();
   void OnStateChange(double now);
   // A new core with these settings; the map service keeps the old core's map.

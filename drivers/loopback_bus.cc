@@ -100,30 +100,17 @@ bool LoopbackBus::Wanted(uint32_t id) const {
 void LoopbackBus::Drain() {
   // recvmmsg: a period's datagrams (the controller's IR and encoder batches) in
   // one call, and a short count means drained: no extra call to see EAGAIN.
-  constexpr unsigned kBurst = 8;
-  struct Slot {
-    can_frame batch[kMaxBatch + 1];
-    alignas(cmsghdr) char ctrl[CMSG_SPACE(sizeof(timespec))];
-  };
-  Slot slots[kBurst];
-  iovec iov[kBurst];
-  mmsghdr msgs[kBurst];
+  RecvBurst<can_frame[kMaxBatch + 1], CMSG_SPACE(sizeof(timespec)), 8> burst;
   for (int i = 0; i < 64 && open_; ++i) {
-    for (unsigned k = 0; k < kBurst; ++k) {
-      iov[k] = iovec{slots[k].batch, sizeof slots[k].batch};
-      msgs[k] = mmsghdr{};
-      msgs[k].msg_hdr.msg_iov = &iov[k];
-      msgs[k].msg_hdr.msg_iovlen = 1;
-      msgs[k].msg_hdr.msg_control = slots[k].ctrl;
-      msgs[k].msg_hdr.msg_controllen = sizeof slots[k].ctrl;
-    }
-    const int got = ::recvmmsg(fd(), msgs, kBurst, MSG_DONTWAIT, nullptr);
+    const int got = burst.Receive(fd());
     if (got < 0) {
       if (errno == EINTR) continue;
       return;  // EAGAIN: drained
     }
-    for (int k = 0; k < got && open_; ++k) Deliver(slots[k].batch, msgs[k].msg_len, &msgs[k].msg_hdr);
-    if (got < static_cast<int>(kBurst)) return;  // fewer than asked: nothing more queued
+    for (int k = 0; k < got && open_; ++k) {
+      Deliver(burst.slots[k].data, burst.msgs[k].msg_len, &burst.msgs[k].msg_hdr);
+    }
+    if (got < burst.size()) return;  // fewer than asked: nothing more queued
   }
 }
 

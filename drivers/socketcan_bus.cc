@@ -110,26 +110,12 @@ void SocketCanBus::HandleErrorFrame(const can_frame& f) {
 }
 
 void SocketCanBus::Drain() {
-  // recvmmsg: up to kBurst frames per call (a period's IR and encoder frames in
+  // recvmmsg: up to 16 frames per call (a period's IR and encoder frames in
   // one or two calls instead of one each), and a short count means drained.
-  constexpr unsigned kBurst = 16;
-  struct Slot {
-    can_frame frame;
-    alignas(cmsghdr) char ctrl[CMSG_SPACE(sizeof(timeval)) + CMSG_SPACE(sizeof(uint32_t))];
-  };
-  Slot slots[kBurst];
-  iovec iov[kBurst];
-  mmsghdr msgs[kBurst];
-  for (int i = 0; i < 256 / static_cast<int>(kBurst); ++i) {
-    for (unsigned k = 0; k < kBurst; ++k) {
-      iov[k] = iovec{&slots[k].frame, sizeof slots[k].frame};
-      msgs[k] = mmsghdr{};
-      msgs[k].msg_hdr.msg_iov = &iov[k];
-      msgs[k].msg_hdr.msg_iovlen = 1;
-      msgs[k].msg_hdr.msg_control = slots[k].ctrl;
-      msgs[k].msg_hdr.msg_controllen = sizeof slots[k].ctrl;
-    }
-    const int got = ::recvmmsg(fd(), msgs, kBurst, MSG_DONTWAIT, nullptr);
+  constexpr size_t kCtrl = CMSG_SPACE(sizeof(timeval)) + CMSG_SPACE(sizeof(uint32_t));
+  RecvBurst<can_frame, kCtrl, 16> burst;
+  for (int i = 0; i < 256 / burst.size(); ++i) {
+    const int got = burst.Receive(fd());
     if (got < 0) {
       if (errno == EINTR) continue;
       if (errno == ENETDOWN) {
@@ -138,8 +124,10 @@ void SocketCanBus::Drain() {
       return;
     }
     if (got > 0) SetLink(true, "");
-    for (int k = 0; k < got; ++k) Deliver(slots[k].frame, msgs[k].msg_len, &msgs[k].msg_hdr);
-    if (got < static_cast<int>(kBurst)) return;  // fewer than asked: nothing more queued
+    for (int k = 0; k < got; ++k) {
+      Deliver(burst.slots[k].data, burst.msgs[k].msg_len, &burst.msgs[k].msg_hdr);
+    }
+    if (got < burst.size()) return;  // fewer than asked: nothing more queued
   }
 }
 

@@ -16,6 +16,35 @@
 
 namespace irslam::drivers {
 
+// Receive buffers for recvmmsg: up to kCount messages read in one call, each
+// into its own Payload and control (cmsg) buffer of kCtrlBytes. A count below
+// kCount means the socket held no more.
+template <typename Payload, size_t kCtrlBytes, unsigned kCount>
+struct RecvBurst {
+  struct Slot {
+    Payload data;
+    alignas(cmsghdr) char ctrl[kCtrlBytes];
+  };
+  Slot slots[kCount];
+  iovec iov[kCount];
+  mmsghdr msgs[kCount];
+
+  // Reads without blocking: the number of messages read (msgs[k].msg_len bytes
+  // into slots[k].data), or -1 with errno set.
+  int Receive(int fd) {
+    for (unsigned k = 0; k < kCount; ++k) {
+      iov[k] = iovec{&slots[k].data, sizeof slots[k].data};
+      msgs[k] = mmsghdr{};
+      msgs[k].msg_hdr.msg_iov = &iov[k];
+      msgs[k].msg_hdr.msg_iovlen = 1;
+      msgs[k].msg_hdr.msg_control = slots[k].ctrl;
+      msgs[k].msg_hdr.msg_controllen = sizeof slots[k].ctrl;
+    }
+    return ::recvmmsg(fd, msgs, kCount, MSG_DONTWAIT, nullptr);
+  }
+  static constexpr int size() { return static_cast<int>(kCount); }
+};
+
 // What both backends share: a non-blocking fd, drained of all it holds each time
 // it becomes readable (Start: on the io_context) or when polled (StartPolled).
 class DescriptorBus : public CanBus {
