@@ -1,5 +1,6 @@
 #include "control/loop_detector.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace irslam::control {
@@ -17,11 +18,29 @@ options::Table<LoopOptions> LoopKeys() {
        "the loop's start is taken after this long of steady following"},
       {"loop_free_object_turn_rad", &O::loop_free_object_turn_rad, 0, 6.3, "rad",
        "a loop that turned more than this clockwise went round a free object"},
+      {"loop_orbit_turn_rad", &O::loop_orbit_turn_rad, M_PI, 1000, "rad",
+       "a net clockwise turn of this much, steady or not, went round a free object"},
   };
   return kKeys;
 }
 
-LoopEvent LoopDetector::Update(double t, bool steady, const Pose2& pose, double distance_m) {
+LoopEvent LoopDetector::Update(double t, bool steady, const Pose2& pose, double distance_m,
+                               bool searching) {
+  if (!have_heading_ || searching) {
+    have_heading_ = true;
+    heading_ = heading_peak_ = 0;
+  } else {
+    heading_ += NormalizeAngle(pose.theta - last_theta_);
+    heading_peak_ = std::max(heading_peak_, heading_);
+  }
+  last_theta_ = pose.theta;
+  if (heading_peak_ - heading_ > options_.loop_orbit_turn_rad) {
+    // Circled something clockwise without a steady anchor: a free object.
+    have_anchor_ = false;
+    follow_since_ = -1;
+    heading_peak_ = heading_;
+    return LoopEvent::kFreeObject;
+  }
   if (!steady) {
     follow_since_ = -1;
   } else if (follow_since_ < 0) {
@@ -44,6 +63,7 @@ LoopEvent LoopDetector::Update(double t, bool steady, const Pose2& pose, double 
     return LoopEvent::kNone;
   if (turned_since_anchor_ < -options_.loop_free_object_turn_rad) {
     have_anchor_ = false;
+    heading_peak_ = heading_;  // (the orbit check starts over too)
     return LoopEvent::kFreeObject;
   }
   return LoopEvent::kRoom;

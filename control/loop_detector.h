@@ -3,7 +3,15 @@
 // come back along); the loop closes when the robot is back near the anchor, at
 // about its heading, after covering a minimum distance. The net turn since the
 // anchor tells the room (walked counter-clockwise with the wall on the right,
-// +2 pi) from the outside of a free object (clockwise, -2 pi). Pure.
+// +2 pi) from the outside of a free object (clockwise, -2 pi).
+// A free object can also be circled without ever following it steadily (a
+// small box whose sides are shorter than the follower needs to settle: the
+// robot orbits it at the lost-wall distance, and no anchor is ever taken): so
+// the heading is also followed all the time, and a net clockwise turn of
+// loop_orbit_turn_rad from its most counter-clockwise value is a free object
+// as well. Following the room (wall on the right) turns +2 pi per loop; going
+// round furniture standing at a wall turns at most about -pi on the way, so a
+// full clockwise turn and then some is only seen round a free object. Pure.
 #ifndef IRSLAM_CONTROL_LOOP_DETECTOR_H_
 #define IRSLAM_CONTROL_LOOP_DETECTOR_H_
 
@@ -19,6 +27,8 @@ struct LoopOptions {
   double loop_anchor_steady_s = 1.5;  // the anchor is taken after this long of steady following
   double loop_free_object_turn_rad = M_PI;  // a loop that turned more than this clockwise went
                                             // round a free object, not the room
+  double loop_orbit_turn_rad = 2 * M_PI + 1.0;  // net clockwise turn (steady or not) that is a
+                                                // free object circled
 };
 options::Table<LoopOptions> LoopKeys();
 
@@ -33,16 +43,24 @@ class LoopDetector {
   explicit LoopDetector(LoopOptions options) : options_(options) {}
 
   // Starts over (no anchor).
-  void Reset() { have_anchor_ = false; }
+  void Reset() {
+    have_anchor_ = false;
+    have_heading_ = false;
+  }
   // One step of wall following: steady is WallFollower::steady(), distance_m the
-  // odometric distance covered so far.
-  LoopEvent Update(double t, bool steady, const Pose2& pose, double distance_m);
+  // odometric distance covered so far; searching: the follower has no wall
+  // (finding one, aligning to it, or leaving one): the orbit check starts over
+  // (its in-place turns are not a way round anything).
+  LoopEvent Update(double t, bool steady, const Pose2& pose, double distance_m,
+                   bool searching = false);
   // After a room loop: the next loop starts here.
   void Rearm(const Pose2& pose, double distance_m);
   bool has_anchor() const { return have_anchor_; }
   const Pose2& anchor() const { return anchor_; }
   // Net heading change since the anchor (+: counter-clockwise).
   double turned() const { return turned_since_anchor_; }
+  // Net clockwise turn since the most counter-clockwise heading (the orbit check).
+  double orbit_turned() const { return heading_peak_ - heading_; }
 
  private:
   LoopOptions options_;
@@ -52,6 +70,11 @@ class LoopDetector {
   Pose2 last_pose_;
   double turned_since_anchor_ = 0;
   double anchor_distance_ = 0;
+  // The orbit check: the unwrapped heading since Reset, and its largest value.
+  bool have_heading_ = false;
+  double last_theta_ = 0;
+  double heading_ = 0;
+  double heading_peak_ = 0;
 };
 
 }  // namespace irslam::control

@@ -214,7 +214,7 @@ WheelCommand Mission::StepRelocalize(double t, double dt, const slam::Slam& slam
   // Follow walls (leaving a free object circled, as in wall following) while
   // the local SLAM maps; the search runs on each closed window.
   const Twist tw = follower_.Step(t, bumps_.Apply(raw_scan, slam.pose()), bumped);
-  if (loop_.Update(t, follower_.steady(), slam.pose(), slam.distance_m()) == LoopEvent::kFreeObject)
+  if (loop_.Update(t, follower_.steady(), slam.pose(), slam.distance_m(), follower_.searching()) == LoopEvent::kFreeObject)
     follower_.Leave(t);
   if (const std::optional<slam::PoseHypothesis> d = reloc_.Step(t, slam)) {
     reloc_progress_.committed = true;
@@ -441,7 +441,7 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
 WheelCommand Mission::StepWallFollow(double t, double dt, const slam::Slam& slam,
                                      const RangeScan& raw_scan, bool bumped) {
   const Twist tw = follower_.Step(t, bumps_.Apply(raw_scan, slam.pose()), bumped);
-  switch (loop_.Update(t, follower_.steady(), slam.pose(), slam.distance_m())) {
+  switch (loop_.Update(t, follower_.steady(), slam.pose(), slam.distance_m(), follower_.searching())) {
     case LoopEvent::kNone:
       break;
     case LoopEvent::kFreeObject:

@@ -68,6 +68,10 @@ class WallFollower {
   // taking it as a wall alongside (following the room, tuned for its accuracy).
   void SetOrbitCorners(bool on) { orbit_corners_ = on; }
   FollowMode mode() const { return mode_; }
+  // No wall being followed: finding one, turning to it, or leaving one.
+  bool searching() const {
+    return mode_ == FollowMode::kFind || mode_ == FollowMode::kAlign || mode_ == FollowMode::kLeave;
+  }
   // True once a wall has been found and followed.
   bool following() const { return has_followed_; }
   // Following, parallel to the wall at the follow distance (within 5 cm, ~5 deg).

@@ -214,7 +214,8 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
   robot::CoreOptions options = robot::DefaultCoreOptions();
   options.mission.mode = "clean";
   int detected = 0, recovered = 0;
-  const int runs = 4;
+  // RELOC_KIDNAP_RUNS=16: the measurement over seeds 40-55 (docs/relocalization.md).
+  const int runs = std::getenv("RELOC_KIDNAP_RUNS") ? std::atoi(std::getenv("RELOC_KIDNAP_RUNS")) : 4;
   for (int i = 0; i < runs; ++i) {
     std::mt19937_64 rng(40 + i);
     const Pose2 start = RandomFreePose(world, &rng);
@@ -255,10 +256,11 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
   }
   // Measured (these seeds): detected in 3 of 4, recovered in 2 of 4 (1 of 4
   // before the wall follower stopped waiting with its bumper pressed against
-  // the wall it was put down at; one re-commit 2.1 m off). Over seeds 40-55:
-  // detected 12 of 16, recovered 9 (6 before). The target is 90 %
-  // recovered: not met (docs/relocalization.md). The floors keep today's rates
-  // from dropping.
+  // the wall it was put down at; one re-commit 2.1 m off). Over seeds 40-55
+  // (RELOC_KIDNAP_RUNS=16): detected 13 of 16, recovered 11 (6, then 9 before
+  // the loop detector's orbit check let a robot orbiting a small box leave
+  // it). The target is 90 % recovered: not met
+  // (docs/relocalization.md). The floors keep today's rates from dropping.
   EXPECT_GE(detected, 3);
   EXPECT_GE(recovered, 2);
 }

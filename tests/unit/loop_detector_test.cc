@@ -1,4 +1,5 @@
-// LoopDetector on a circular wall-following path of radius 1 m at 0.2 m/s.
+// LoopDetector on a circular wall-following path of radius 1 m at 0.2 m/s, and
+// its orbit check on heading sequences.
 #include "control/loop_detector.h"
 
 #include <gtest/gtest.h>
@@ -60,6 +61,69 @@ TEST(LoopDetectorTest, NoAnchorUntilSteadyLongEnough) {
   EXPECT_FALSE(d.has_anchor());  // 1.4 s
   d.Update(2.75, true, p, 0);
   EXPECT_TRUE(d.has_anchor());  // 1.55 s
+}
+
+// The orbit check: round a small box without ever following it steadily (no
+// anchor), as the follower does round boxes whose sides are shorter than it
+// needs to settle.
+TEST(LoopDetectorTest, CirclingClockwiseWithoutEverBeingSteadyIsAFreeObject) {
+  LoopDetector d({});
+  LoopEvent e = LoopEvent::kNone;
+  double t_event = -1;
+  for (int k = 0; k * 0.1 <= 100 && e == LoopEvent::kNone; ++k) {
+    const double t = k * 0.1, a = -0.2 * t;
+    e = d.Update(t, false, {std::cos(a), std::sin(a), NormalizeAngle(a - M_PI / 2)}, 0.2 * t);
+    if (e != LoopEvent::kNone) t_event = t;
+  }
+  EXPECT_FALSE(d.has_anchor());
+  ASSERT_EQ(e, LoopEvent::kFreeObject);
+  // 0.2 rad/s clockwise: 2 pi + 1 = 7.283 rad is passed at t = 36.5 s.
+  EXPECT_NEAR(t_event, 36.5, 1e-9);
+  EXPECT_NEAR(d.orbit_turned(), 0, 1e-9);  // starts over after the event
+}
+
+TEST(LoopDetectorTest, TheRoomCounterClockwiseWithAWallBoxDetourIsNoFreeObject) {
+  // Along a wall (heading 0), round a box standing at it: an inner corner
+  // (+pi/2), two outer corners (-pi/2 each, arced), an inner corner back to the
+  // wall; then the room's corner (+pi/2); four times round, all unsteady.
+  LoopDetector d({});
+  double theta = 0, t = 0;
+  const auto turn = [&](double by) {
+    for (int i = 0; i < 20; ++i) {
+      theta += by / 20;
+      t += 0.1;
+      ASSERT_EQ(d.Update(t, false, {0, 0, NormalizeAngle(theta)}, t), LoopEvent::kNone);
+    }
+  };
+  for (int loop = 0; loop < 4; ++loop) {
+    for (int side = 0; side < 4; ++side) {
+      turn(M_PI / 2);
+      turn(-M_PI / 2);
+      turn(-M_PI / 2);
+      turn(M_PI / 2);
+      turn(M_PI / 2);
+    }
+  }
+  EXPECT_NEAR(d.orbit_turned(), 0, 1e-9);  // never far below its peak
+}
+
+TEST(LoopDetectorTest, ASearchForAWallStartsTheOrbitCheckOver) {
+  // Most of a turn clockwise round something, then the follower lost it and
+  // searched (left it, or found it again): what comes after counts afresh.
+  LoopDetector d({});
+  double t = 0, theta = 0;
+  const auto step = [&](double by, bool searching) {
+    theta += by;
+    t += 0.1;
+    return d.Update(t, false, {0, 0, NormalizeAngle(theta)}, 0, searching);
+  };
+  for (int i = 0; i < 60; ++i) ASSERT_EQ(step(-0.1, false), LoopEvent::kNone) << i;
+  EXPECT_NEAR(d.orbit_turned(), 5.9, 1e-9);  // (the first update only sets the heading)
+  EXPECT_EQ(step(0.0, true), LoopEvent::kNone);
+  EXPECT_NEAR(d.orbit_turned(), 0, 1e-9);
+  for (int i = 0; i < 68; ++i) ASSERT_EQ(step(-0.1, false), LoopEvent::kNone) << i;
+  EXPECT_NEAR(d.orbit_turned(), 6.8, 1e-9);
+  EXPECT_EQ(step(-0.5, false), LoopEvent::kFreeObject);  // 7.3 > 2 pi + 1
 }
 
 }  // namespace
