@@ -1,5 +1,6 @@
 #include "control/relocalize.h"
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -114,10 +115,15 @@ bool MapAgreement::Step(const slam::Slam& slam, const RangeScan& scan) {
   // Collinear pieces of mapped lines (tied or declined) are the map seen
   // again in part and are not counted against it; a line with no mapped line
   // near it, one the gate rejects, or one at an angle the map does not have is.
+  // A new line merged into a saved one (Slam: merges_into_saved) is the map
+  // seen again, found by the merge rather than the association: it counts as
+  // matched, and no longer as unexplained.
   const int plain_new = (s.insertions - last_.insertions) - (s.collinear_insertions - last_.collinear_insertions) -
                         (s.collinear_declined - last_.collinear_declined);
-  windows_.push_back({s.updates - last_.updates,
-                      plain_new + (s.rejected_gate - last_.rejected_gate) + (s.rejected_angle - last_.rejected_angle)});
+  const int resaw = s.merges_into_saved - last_.merges_into_saved;
+  windows_.push_back({s.updates - last_.updates + resaw,
+                      std::max(0, plain_new + (s.rejected_gate - last_.rejected_gate) +
+                                      (s.rejected_angle - last_.rejected_angle) - resaw)});
   last_ = s;
   const size_t keep = static_cast<size_t>(options_.check_windows);
   if (windows_.size() > keep) windows_.pop_front();

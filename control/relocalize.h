@@ -10,8 +10,9 @@
 // MapAgreement: after the commit, every closed window's association outcome
 // (lines matched to the map vs lines the map did not explain: inserted with no
 // mapped line near them, rejected by the innovation gate, or at an angle the
-// map does not have; collinear pieces of mapped lines count for neither) is kept over the last `check_windows`
-// windows. In a known room nearly every line matches; when most do not, the
+// map does not have; collinear pieces of mapped lines count for neither; a
+// new line that the SLAM merges into a saved one counts as matched) is kept
+// over the last `check_windows` windows. In a known room nearly every line matches; when most do not, the
 // map disagrees (the robot was carried elsewhere, or the commit was wrong):
 // the mission relocalises again in the map as it was `check_windows` windows
 // earlier (checkpoints of the map frame's lines and trajectory), so lines

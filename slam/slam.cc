@@ -162,6 +162,7 @@ void Slam::AdoptMap(const Pose2& local_to_map, const std::vector<LineFeature>& s
   for (auto& p : trajectory_) p.pose = Compose(local_to_map, p.pose);
   gate_rejections_in_a_row_ = 0;
   saved_frame_ = true;
+  first_new_id_ = next_id_;
 }
 
 void Slam::ForgetMap() {
@@ -172,6 +173,7 @@ void Slam::ForgetMap() {
   trajectory_.clear();
   gate_rejections_in_a_row_ = 0;
   saved_frame_ = false;
+  first_new_id_ = 0;
 }
 
 void Slam::RemoveLines(const std::vector<int>& ids) {
@@ -571,6 +573,8 @@ void Slam::MergeOverlapping() {
         r(1, 1) = 1e-8;
         ekf_.Update(y, h, r);
         const LineFeature gone = lines_[static_cast<size_t>(k)];
+        if (saved_frame_ && lines_[static_cast<size_t>(i)].id < first_new_id_ && gone.id >= first_new_id_)
+          ++stats_.merges_into_saved;
         ReprojectEndpoints();
         ExtendEndpoints(i, gone.p0, gone.p1);
         lines_[static_cast<size_t>(i)].observations += gone.observations;

@@ -130,6 +130,11 @@ struct SlamStats {
   int gate_recoveries = 0;  // rejected matches used anyway, noise inflated (gate_recovery_after)
   int merges = 0;
   int loop_closures = 0;    // merges into the first line
+  // Merges of a line mapped since AdoptMap into a line of the adopted saved
+  // map: a wall of the saved map seen again whose piece the association missed
+  // (a short piece a few degrees off, far from the origin, is beyond eq. (13)'s
+  // Hough distance) but the merge recognised.
+  int merges_into_saved = 0;
 };
 
 // Config section [slam]: SlamKeys() (with MotionNoiseKeys()), and its
@@ -231,6 +236,7 @@ class Slam {
   int next_id_ = 1;
   int gate_rejections_in_a_row_ = 0;
   bool saved_frame_ = false;  // AdoptMap: the internal frame is a saved map's
+  int first_new_id_ = 0;      // AdoptMap: lines with a smaller id were adopted
 
   // Recent odometry poses (for scans stamped between encoder frames) and scans
   // waiting for the odometry to reach their time.

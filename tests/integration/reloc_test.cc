@@ -160,6 +160,28 @@ TEST(RelocTest, Fig14FromRandomPosesCommitsRightKeepsIdsAndFinishes) {
   EXPECT_GE(right, runs - 1);
 }
 
+// Cleaning after a right commit in a room that has not changed: the map's
+// agreement check must not send the robot back to relocalising. Before a new
+// line merged into a saved one counted as the map seen again, short wall
+// pieces a few degrees off far from the origin (beyond eq. (13)'s Hough
+// distance, so inserted, then merged) read as "0 % of recent lines matched"
+// seconds after the commit: runs 2 and 5 of these (the RelocDebug sweep's
+// fig14 starts) relocalised a second time, 6 of 10 over the sweep.
+TEST(RelocTest, CleaningAfterARightCommitDoesNotRelocaliseAgain) {
+  const sim::World world = testing::LoadTestWorld("fig14");
+  const Made made = MakeMap(world, 1);
+  std::mt19937_64 rng(99);
+  for (int i = 0; i < 6; ++i) {
+    const Pose2 start = RandomFreePose(world, &rng);
+    const RelocResult r = Relocalise(world, made, start, 100 + i, 1500, true);
+    SCOPED_TRACE("run " + std::to_string(i));
+    ASSERT_TRUE(r.committed);
+    EXPECT_LE(r.err_at_commit_m, 0.2);
+    EXPECT_EQ(r.attempts, 1) << r.reason;
+    EXPECT_EQ(r.end, control::MissionState::kDone) << r.reason;
+  }
+}
+
 // Issue 13's resume, through issue 14: a cleaning stopped after two cells (the
 // map saved then), a later mission from elsewhere relocalises in that map and
 // cleans only the cells left.
@@ -257,9 +279,10 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
   // Measured (these seeds): detected in 3 of 4, recovered in 2 of 4 (1 of 4
   // before the wall follower stopped waiting with its bumper pressed against
   // the wall it was put down at; one re-commit 2.1 m off). Over seeds 40-55
-  // (RELOC_KIDNAP_RUNS=16): detected 13 of 16, recovered 11 (6, then 9 before
+  // (RELOC_KIDNAP_RUNS=16): detected 13 of 16, recovered 12 (6, then 9 before
   // the loop detector's orbit check let a robot orbiting a small box leave
-  // it). The issue's target is 90 % recovered: not met
+  // it, then 11 before lines merged into saved ones counted as agreeing). The
+  // issue's target is 90 % recovered: not met
   // (docs/relocalization.md). The floors keep today's rates from dropping.
   EXPECT_GE(detected, 3);
   EXPECT_GE(recovered, 2);
