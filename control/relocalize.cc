@@ -19,6 +19,8 @@ options::Table<RelocalizeOptions> RelocalizeKeys() {
        "relocalisations in one mission before the saved map is given up"},
       {"scan_max_m", &O::scan_max_m, 0.1, 2, "m",
        "after the commit, IR rays whose mapped wall is within this are judged against the map ..."},
+      {"scan_min_m", &O::scan_min_m, 0, 2, "m",
+       "... and not nearer than this (below the IR sensors' range a reading is missing)"},
       {"scan_tolerance_m", &O::scan_tolerance_m, 0.01, 1, "m", "... a reading off by more (or missing) disagrees"},
       {"scan_rays", &O::scan_rays, 10, 100000, "", "... over this many recent judged rays"},
       {"scan_max_disagree", &O::scan_max_disagree, 0, 1, "",
@@ -91,7 +93,7 @@ bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan) {
         wall = true;
       }
     }
-    if (!wall) continue;
+    if (!wall || expected < options_.scan_min_m) continue;
     const auto& m = scan.range_m[i];
     const bool agrees = m && std::abs(*m - expected) <= options_.scan_tolerance_m;
     rays_.push_back(agrees);

@@ -44,13 +44,17 @@ struct RelocalizeOptions {
   double min_agreement = 0.3;      // matched share below this: the map disagrees
   int max_attempts = 5;            // relocalisations in one mission before giving the map up
   // The IR readings against the ranges the map predicts (rays whose mapped
-  // wall lies within scan_max_m): a reading off by more than scan_tolerance_m
-  // (or missing) disagrees; over the last scan_rays judged rays, more than
-  // scan_max_disagree of them disagreeing means the map disagrees.
+  // wall lies within scan_max_m, and not nearer than scan_min_m: below the
+  // sensors' 0.2 m minimum range a reading is missing, and judging those rays
+  // made half of all rays disagree in a room that had not changed): a reading
+  // off by more than scan_tolerance_m (or missing) disagrees; over the last
+  // scan_rays judged rays, more than scan_max_disagree of them disagreeing
+  // means the map disagrees (1: off).
   double scan_max_m = 0.7;
+  double scan_min_m = 0.3;
   double scan_tolerance_m = 0.15;
   int scan_rays = 150;
-  double scan_max_disagree = 1.0;  // 1: off (see docs/relocalization.md: it misjudges today)
+  double scan_max_disagree = 0.7;
   MapChangeOptions changes;        // moved furniture (map_changes.h)
 };
 options::Table<RelocalizeOptions> RelocalizeKeys();  // [relocalize], beside slam::RelocalizeKeys()

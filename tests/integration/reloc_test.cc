@@ -276,16 +276,17 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
           << "run " << i << " line " << l.id;
     }
   }
-  // Measured (these seeds): detected in 3 of 4, recovered in 2 of 4 (1 of 4
+  // Measured (these seeds): detected in 3 of 4, recovered in 3 of 4 (2, and 1
   // before the wall follower stopped waiting with its bumper pressed against
   // the wall it was put down at; one re-commit 2.1 m off). Over seeds 40-55
-  // (RELOC_KIDNAP_RUNS=16): detected 13 of 16, recovered 12 (6, then 9 before
+  // (RELOC_KIDNAP_RUNS=16): detected 15 of 16, recovered 15 (6, then 9 before
   // the loop detector's orbit check let a robot orbiting a small box leave
-  // it, then 11 before lines merged into saved ones counted as agreeing). The
-  // issue's target is 90 % recovered: not met
+  // it, 11 before lines merged into saved ones counted as agreeing, 12 before
+  // the IR-ray agreement was turned on). The target is 90 % recovered:
+  // met on these 16 seeds; not yet judged on more
   // (docs/relocalization.md). The floors keep today's rates from dropping.
   EXPECT_GE(detected, 3);
-  EXPECT_GE(recovered, 2);
+  EXPECT_GE(recovered, 3);
 }
 
 TEST(RelocTest, FurnitureMovedHalfAMetreIsDetectedAndKeepsItsId) {
