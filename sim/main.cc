@@ -3,12 +3,19 @@
 //                    [--map-in MAP.json] [--start X,Y,THETA]
 //   irslam-sim run   --world W.json --baseline bounce [--max-time SECONDS] [--map-out R.json] [--svg R.svg]
 //   irslam-sim serve --can IFACE --world W.json [--seed S] [--time-scale K] [--truth-out truth.json]
+//                    [--realtime-priority N]
+#include <pthread.h>
+#include <sched.h>
+
 #include <CLI/CLI.hpp>
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
+#include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <memory>
@@ -388,7 +395,30 @@ int RunBounceBaseline(const Common& c, double max_time, const std::string& map_o
   return 0;
 }
 
-int Serve(const Common& c, const std::string& iface, double time_scale) {
+// serve's tick: the simulated controller advances every 1 ms of wall time.
+// A tick that comes later than kStallS after the one before is a stall: the
+// host did not run the simulator (the robot time it missed is then simulated
+// in one burst, under the last wheel command: a latency a real controller,
+// which is its own microcontroller, never has). Stalls are counted and the
+// longest is reported, so a test rig can tell a starved simulator from the
+// robot's own behaviour.
+constexpr double kStallS = 0.010;
+
+// --realtime-priority: SCHED_FIFO for the simulator's thread (sched(7)), so
+// that a loaded test host cannot starve the simulated hardware. Refused (no
+// CAP_SYS_NICE, RLIMIT_RTPRIO too low) it says why and keeps normal scheduling.
+void SetRealtime(int priority) {
+  if (priority <= 0) return;
+  sched_param p{};
+  p.sched_priority = priority;
+  const int err = ::pthread_setschedparam(pthread_self(), SCHED_FIFO | SCHED_RESET_ON_FORK, &p);
+  if (err != 0) {
+    std::fprintf(stderr, "irslam-sim: SCHED_FIFO %d refused (%s): normal scheduling\n", priority,
+                 std::strerror(err));
+  }
+}
+
+int Serve(const Common& c, const std::string& iface, double time_scale, int realtime_priority) {
   World world;
   robot::CoreOptions core_opts;
   uint64_t seed;
@@ -405,6 +435,7 @@ int Serve(const Common& c, const std::string& iface, double time_scale) {
     std::fprintf(stderr, "irslam-sim: %s\n", error.c_str());
     return 1;
   }
+  SetRealtime(realtime_priority);
   bus->Start([&](const can_frame& f, double) { sim.HandleFrame(f); });
 
   using Clock = std::chrono::steady_clock;
@@ -414,16 +445,24 @@ int Serve(const Common& c, const std::string& iface, double time_scale) {
   timer.expires_at(start + tick);
   std::vector<can_frame> frames, out;
   double last_wall = 0;
+  uint64_t stalls = 0;
+  double longest_stall = 0;  // wall seconds between two ticks
   std::function<void(const boost::system::error_code&)> on_tick =
       [&](const boost::system::error_code& ec) {
         if (ec) return;
         const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+        const double gap = wall - last_wall;
+        if (gap > kStallS && ++stalls <= 10) {
+          std::fprintf(stderr, "irslam-sim: stalled %.1f ms wall at %.2f s robot time\n", 1000 * gap,
+                       sim.time());
+        }
+        longest_stall = std::max(longest_stall, gap);
         frames.clear();
         out.clear();
         while (const auto to = injector.TakeKidnap(wall * time_scale)) sim.Teleport(*to);
         sim.AdvanceTo(wall * time_scale, &frames);
         injector.Process(sim.time(), frames, &out);
-        injector.Flood(sim.time(), wall - last_wall, &out);
+        injector.Flood(sim.time(), gap, &out);
         last_wall = wall;
         for (const can_frame& f : out) bus->Send(f);
         timer.expires_at(timer.expiry() + tick);
@@ -444,12 +483,17 @@ int Serve(const Common& c, const std::string& iface, double time_scale) {
   io.run();
   nlohmann::json truth = sim.Truth();
   if (faults.any()) truth["faults"] = FaultsJson(injector.counters());
+  truth["serve"] = {{"time_scale", time_scale}, {"stalls", stalls}, {"longest_stall_s", longest_stall}};
   if (!WriteJson(c.truth_out, truth)) {
     std::fprintf(stderr, "irslam-sim: cannot write %s\n", c.truth_out.c_str());
     return 1;
   }
-  std::fprintf(stderr, "irslam-sim: stopped at %.1f s robot time, %llu collisions\n", sim.time(),
-               static_cast<unsigned long long>(sim.collisions()));
+  std::fprintf(stderr,
+               "irslam-sim: stopped at %.1f s robot time, %llu collisions; %llu stalls over %.0f ms, "
+               "longest %.1f ms wall (%.0f ms robot)\n",
+               sim.time(), static_cast<unsigned long long>(sim.collisions()),
+               static_cast<unsigned long long>(stalls), 1000 * kStallS, 1000 * longest_stall,
+               1000 * longest_stall * time_scale);
   return 0;
 }
 
@@ -536,6 +580,11 @@ int main(int argc, char** argv) {
   serve->add_option("--can", iface, "vcan0, can0 or unix:PATH")->required();
   serve->add_option("--time-scale", time_scale, "Robot time runs K times faster than wall time")
       ->check(CLI::Range(0.01, 1000.0));
+  int realtime_priority = 0;
+  serve->add_option("--realtime-priority", realtime_priority,
+                    "SCHED_FIFO priority for the simulator (the test rig's hardware must not be starved by "
+                    "a loaded host); 0 = normal scheduling")
+      ->check(CLI::Range(0, 99));
   auto* generate = app.add_subcommand("generate", "Write a random world (the robustness campaign's rooms)");
   uint64_t gen_seed = 1;
   std::string profile = "nominal", gen_out;
@@ -550,5 +599,5 @@ int main(int argc, char** argv) {
   if (*generate) return irslam::sim::Generate(gen_seed, profile, gen_out);
   if (*run && !baseline.empty()) return irslam::sim::RunBounceBaseline(common, max_time, map_out, svg_out);
   if (*run) return irslam::sim::Run(common, max_time, map_out, svg_out, lines_out, events_out, tick_clock);
-  return irslam::sim::Serve(common, iface, time_scale);
+  return irslam::sim::Serve(common, iface, time_scale, realtime_priority);
 }

@@ -120,7 +120,8 @@ class E2eTest : public ::testing::Test {
   void StartAll(const StartOptions& o = StartOptions()) {
     std::ofstream(ConfigPath()) << TestConfig(o.config).dump(2) << "\n";
     std::vector<std::string> sim = {kSim, "serve", "--can", bus_, "--world", kSrc + "/tests/worlds/" + o.world,
-                                    "--time-scale", std::to_string(kScale), "--truth-out", dir_ + "/truth.json"};
+                                    "--time-scale", std::to_string(kScale), "--truth-out", dir_ + "/truth.json",
+                                    "--realtime-priority", testing::kSimRealtimePriority};
     sim.insert(sim.end(), o.sim_args.begin(), o.sim_args.end());
     ASSERT_TRUE(sim_.Start(sim, dir_ + "/sim.log"));
     StartDaemon(o);

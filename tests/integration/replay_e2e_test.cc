@@ -93,7 +93,8 @@ TEST_F(RecordReplayTest, AMissionRecordedOnTheBusReplaysOfflineToTheLiveMap) {
                                           {"record", {{"enabled", true}}}}
                                .dump(2);
   ASSERT_TRUE(sim_.Start({kBin + "/sim/irslam-sim", "serve", "--can", bus_, "--world",
-                          kSrc + "/tests/worlds/wall_follow_fig14.json", "--time-scale", std::to_string(kScale)},
+                          kSrc + "/tests/worlds/wall_follow_fig14.json", "--time-scale", std::to_string(kScale),
+                          "--realtime-priority", testing::kSimRealtimePriority},
                          dir_ + "/sim.log"));
   // irslam-candump beside the daemon: the log an engineer takes with a laptop on the bus.
   ASSERT_TRUE(dump_.Start({kBin + "/daemon/irslam-candump", bus_}, dir_ + "/candump.log"));
