@@ -26,14 +26,15 @@ options::Table<LoopOptions> LoopKeys() {
 
 LoopEvent LoopDetector::Update(double t, bool steady, const Pose2& pose, double distance_m,
                                bool searching) {
-  if (!have_heading_ || searching) {
+  if (!have_heading_) {
     have_heading_ = true;
     heading_ = heading_peak_ = 0;
   } else {
     heading_ += NormalizeAngle(pose.theta - last_theta_);
-    heading_peak_ = std::max(heading_peak_, heading_);
   }
   last_theta_ = pose.theta;
+  // Searching (no wall): the orbit check starts over from here.
+  heading_peak_ = searching ? heading_ : std::max(heading_peak_, heading_);
   if (heading_peak_ - heading_ > options_.loop_orbit_turn_rad) {
     // Circled something clockwise without a steady anchor: a free object.
     have_anchor_ = false;
@@ -49,19 +50,16 @@ LoopEvent LoopDetector::Update(double t, bool steady, const Pose2& pose, double 
   if (follow_since_ >= 0 && t - follow_since_ >= options_.loop_anchor_steady_s && !have_anchor_) {
     have_anchor_ = true;
     anchor_ = pose;
-    last_pose_ = anchor_;
-    turned_since_anchor_ = 0;
+    anchor_heading_ = heading_;
     anchor_distance_ = distance_m;
   }
   if (!have_anchor_) return LoopEvent::kNone;
-  turned_since_anchor_ += NormalizeAngle(pose.theta - last_pose_.theta);
-  last_pose_ = pose;
   if (distance_m - anchor_distance_ <= options_.loop_min_distance_m) return LoopEvent::kNone;
   const double d = std::hypot(pose.x - anchor_.x, pose.y - anchor_.y);
   const double a = std::abs(NormalizeAngle(pose.theta - anchor_.theta));
   if (d >= options_.loop_close_radius_m || a >= options_.loop_close_angle_rad)
     return LoopEvent::kNone;
-  if (turned_since_anchor_ < -options_.loop_free_object_turn_rad) {
+  if (turned() < -options_.loop_free_object_turn_rad) {
     have_anchor_ = false;
     heading_peak_ = heading_;  // (the orbit check starts over too)
     return LoopEvent::kFreeObject;
@@ -72,7 +70,7 @@ LoopEvent LoopDetector::Update(double t, bool steady, const Pose2& pose, double 
 void LoopDetector::Rearm(const Pose2& pose, double distance_m) {
   anchor_ = pose;
   anchor_distance_ = distance_m;
-  turned_since_anchor_ = 0;
+  anchor_heading_ = heading_;
 }
 
 }  // namespace irslam::control

@@ -58,7 +58,7 @@ class LoopDetector {
   bool has_anchor() const { return have_anchor_; }
   const Pose2& anchor() const { return anchor_; }
   // Net heading change since the anchor (+: counter-clockwise).
-  double turned() const { return turned_since_anchor_; }
+  double turned() const { return heading_ - anchor_heading_; }
   // Net clockwise turn since the most counter-clockwise heading (the orbit check).
   double orbit_turned() const { return heading_peak_ - heading_; }
 
@@ -67,10 +67,11 @@ class LoopDetector {
   double follow_since_ = -1;  // steady following since then (-1: not steady)
   bool have_anchor_ = false;
   Pose2 anchor_;
-  Pose2 last_pose_;
-  double turned_since_anchor_ = 0;
+  double anchor_heading_ = 0;  // heading_ at the anchor
   double anchor_distance_ = 0;
-  // The orbit check: the unwrapped heading since Reset, and its largest value.
+  // The heading unwrapped since Reset (the sum of the turns between updates),
+  // and the orbit check's most counter-clockwise value of it since the follower
+  // last searched.
   bool have_heading_ = false;
   double last_theta_ = 0;
   double heading_ = 0;
