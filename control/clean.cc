@@ -55,6 +55,24 @@ Clean::Clean(CleaningOptions options, GoToOptions go_to, const RobotGeometry& ge
       mounts_(mounts),
       go_to_(CleaningGoTo(go_to, options), geometry, mounts) {}
 
+namespace {
+
+// The orientation a saved cleaning was planned in, from its routes: the lanes
+// are most of their length (none when no route was saved).
+std::optional<bool> LanesAlongX(const CleaningProgress& p) {
+  double along_x = 0, along_y = 0;
+  for (const auto& c : p.cells) {
+    for (size_t k = 1; k < c.route.size(); ++k) {
+      along_x += std::abs(c.route[k].x() - c.route[k - 1].x());
+      along_y += std::abs(c.route[k].y() - c.route[k - 1].y());
+    }
+  }
+  if (along_x + along_y <= 0) return std::nullopt;
+  return along_x > along_y;
+}
+
+}  // namespace
+
 void Clean::Begin(double t, const slam::Slam& slam, const EnvironmentModel& m, const BumpMemory& bumps,
                   std::optional<CleaningProgress> resume) {
   progress_ = {};
@@ -79,7 +97,8 @@ void Clean::Begin(double t, const slam::Slam& slam, const EnvironmentModel& m, c
     for (const auto& p : bumps.points()) contacts.push_back(RotateVector(p, rot));
     const Pose2 me = slam.map_pose();
     room_ = *m.room.box;
-    planner_.Start(room_, objects, contacts, {me.x, me.y}, radius_m_, options_);
+    planner_.Start(room_, objects, contacts, {me.x, me.y}, radius_m_, options_,
+                   resume_ ? LanesAlongX(*resume_) : std::nullopt);
     stage_ = PlanStage::kCoverage;
   }
   cell_ = 0;
@@ -148,18 +167,21 @@ double Clean::PlanStep(double t) {
       return work;
     }
     case PlanStage::kResume: {
-      // A cleaning stopped before (not finished) goes on with the cells it left.
+      // A cleaning stopped before (not finished) goes on with the cells it
+      // left: each planned cell is matched against the cells done then (one a
+      // step), then what each of those swept is marked (one a step).
       const size_t i = stage_next_++;
-      const bool done = ResumeCell(i, *resume_);
-      resumed_cells_ += done;
-      if (stage_next_ >= progress_.cells.size()) Started(t);
-      if (!done) return static_cast<double>(resume_->cells.size()) * 20;  // the polygons compared
-      // Its route marked: a disc of grid cells every quarter of the cleaning width.
-      const auto& r = plan_.routes[i];
-      double len = 0;
-      for (size_t k = 1; k < r.size(); ++k) len += (r[k] - r[k - 1]).norm();
-      const double disc = options_.cleaning_width_m / options_.coverage_cell_m + 2;
-      return (len / (0.25 * options_.cleaning_width_m) + static_cast<double>(r.size())) * disc * disc;
+      if (i < progress_.cells.size()) {
+        double work = 0;
+        resumed_cells_ += ResumeCell(i, *resume_, &work);
+        return work;
+      }
+      const size_t k = i - progress_.cells.size();
+      if (k >= resume_->cells.size()) {
+        Started(t);
+        return 1;
+      }
+      return resume_->cells[k].done ? MarkSwept(resume_->cells[k]) : 1;
     }
   }
   return 0;
@@ -227,43 +249,80 @@ void Clean::SkipDone() {
 }
 
 namespace {
-double PolygonArea(const std::vector<Eigen::Vector2d>& p) {
-  double a = 0;
-  for (size_t i = 0; i < p.size(); ++i) {
-    const auto& u = p[i];
-    const auto& v = p[(i + 1) % p.size()];
-    a += u.x() * v.y() - v.x() * u.y();
+
+Box BoundsOf(const std::vector<Eigen::Vector2d>& p) {
+  Box b{p[0].x(), p[0].y(), p[0].x(), p[0].y()};
+  for (const auto& q : p) {
+    b.xmin = std::min(b.xmin, q.x());
+    b.ymin = std::min(b.ymin, q.y());
+    b.xmax = std::max(b.xmax, q.x());
+    b.ymax = std::max(b.ymax, q.y());
   }
-  return 0.5 * std::abs(a);
+  return b;
 }
 
-Eigen::Vector2d PolygonCentre(const std::vector<Eigen::Vector2d>& p) {
-  Eigen::Vector2d c = Eigen::Vector2d::Zero();
-  for (const auto& q : p) c += q;
-  return p.empty() ? c : Eigen::Vector2d(c / static_cast<double>(p.size()));
+bool Overlaps(const Box& a, const Box& b) {
+  return a.xmin < b.xmax && b.xmin < a.xmax && a.ymin < b.ymax && b.ymin < a.ymax;
 }
 
 }  // namespace
 
-bool Clean::ResumeCell(size_t i, const CleaningProgress& before) {
+bool Clean::ResumeCell(size_t i, const CleaningProgress& before, double* work) {
+  // The plan may be cut differently from the one stopped (contacts are not
+  // saved; an object seen again may have changed): a cell is done when most of
+  // it lies inside the cells done then, sampled on a lattice twice the
+  // coverage grid's cell.
   auto& pc = progress_.cells[i];
-  const double area = PolygonArea(pc.polygon);
-  const bool was_done = std::any_of(before.cells.begin(), before.cells.end(), [&](const auto& b) {
-    if (!b.done || b.polygon.size() < 3 || pc.polygon.size() < 3) return false;
-    const double ba = PolygonArea(b.polygon);
-    return room_geometry::InsidePolygon(pc.polygon, PolygonCentre(b.polygon)) && std::abs(ba - area) <= 0.25 * area;
-  });
-  if (!was_done) return false;
+  if (pc.polygon.size() < 3) return false;
+  const Box box = BoundsOf(pc.polygon);
+  std::vector<const std::vector<Eigen::Vector2d>*> done;
+  double vertices = static_cast<double>(pc.polygon.size());
+  for (const auto& b : before.cells) {
+    if (!b.done || b.polygon.size() < 3 || !Overlaps(BoundsOf(b.polygon), box)) continue;
+    done.push_back(&b.polygon);
+    vertices += static_cast<double>(b.polygon.size());
+  }
+  const double step = 2 * options_.coverage_cell_m;
+  const int nx = static_cast<int>(box.width() / step) + 1, ny = static_cast<int>(box.height() / step) + 1;
+  *work = static_cast<double>(nx) * ny * vertices;
+  if (done.empty()) return false;
+  long inside = 0, inside_done = 0;
+  for (int a = 0; a < nx; ++a) {
+    for (int b = 0; b < ny; ++b) {
+      const Eigen::Vector2d p(box.xmin + (a + 0.5) * step, box.ymin + (b + 0.5) * step);
+      if (!room_geometry::InsidePolygon(pc.polygon, p)) continue;
+      ++inside;
+      inside_done += std::any_of(done.begin(), done.end(),
+                                 [&](const auto* d) { return room_geometry::InsidePolygon(*d, p); });
+    }
+  }
+  if (inside == 0 || static_cast<double>(inside_done) < options_.resume_overlap * static_cast<double>(inside))
+    return false;
   pc.done = true;
   ++progress_.cells_done;
-  // Its route counts as swept (the coverage estimate marks the body's path).
-  const auto& r = plan_.routes[i];
+  return true;
+}
+
+double Clean::MarkSwept(const CleaningProgress::Cell& before) {
+  // Its route counts as swept (the coverage estimate marks the body's path);
+  // a cell saved without its route: its outline.
+  const auto& r = before.route;
+  if (r.size() < 2) {
+    grid_.MarkInside(before.polygon);
+    const Box b = BoundsOf(before.polygon);
+    return (b.width() / options_.coverage_cell_m + 2) * (b.height() / options_.coverage_cell_m + 2) *
+           static_cast<double>(before.polygon.size() + 1);
+  }
+  double len = 0;
   for (size_t k = 1; k < r.size(); ++k) {
-    const double len = (r[k] - r[k - 1]).norm();
-    const int n = std::max(1, static_cast<int>(len / (0.25 * options_.cleaning_width_m)));
+    const double seg = (r[k] - r[k - 1]).norm();
+    len += seg;
+    const int n = std::max(1, static_cast<int>(seg / (0.25 * options_.cleaning_width_m)));
     for (int j = 0; j <= n; ++j) grid_.Mark(r[k - 1] + (r[k] - r[k - 1]) * (static_cast<double>(j) / n));
   }
-  return true;
+  // A disc of grid cells every quarter of the cleaning width.
+  const double disc = options_.cleaning_width_m / options_.coverage_cell_m + 2;
+  return (len / (0.25 * options_.cleaning_width_m) + static_cast<double>(r.size())) * disc * disc;
 }
 
 CleaningProgress Clean::Progress(double t, double distance_m) const {

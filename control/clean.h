@@ -80,10 +80,10 @@ class Clean {
   // robot is now and the contacts remembered now. The planning is done by Plan,
   // a bounded piece per control period (issue 15); then the cleaning starts at
   // the first cell not done. `resume`: a cleaning stopped before (issue 13; the
-  // saved map's or the live map's progress) goes on: each planned cell that
-  // matches a cell done then (its outline's centre inside this cell's outline,
-  // areas within a quarter) is done now, its route counted as swept, and the
-  // tour skips it (resumed_cells counts them).
+  // saved map's or the live map's progress) goes on: each planned cell lying
+  // mostly inside the cells done then (resume_overlap of its outline) is done
+  // now and the tour skips it (resumed_cells counts them); the routes of the
+  // cells done then count as swept. The new plan may be cut differently.
   void Begin(double t, const slam::Slam& slam, const EnvironmentModel& m, const BumpMemory& bumps,
              std::optional<CleaningProgress> resume = std::nullopt);
   // Planning (Begin was called, the plan is not complete): the robot holds still.
@@ -116,7 +116,11 @@ class Clean {
   // the cells done before (one per step).
   enum class PlanStage { kNone, kCoverage, kGrid, kCells, kResume };
   // Whether the planned cell i was done in `before` (its route then marks the grid).
-  bool ResumeCell(size_t i, const CleaningProgress& before);
+  // Resuming: planned cell i is done if it lies mostly inside the cells done
+  // before (CleaningOptions::resume_overlap); *work: the planning it took.
+  bool ResumeCell(size_t i, const CleaningProgress& before, double* work);
+  // Resuming: what a cell done before swept counts as covered; the work.
+  double MarkSwept(const CleaningProgress::Cell& before);
   // One piece of the planning; returns its work (CleaningOptions::plan_work_per_period).
   double PlanStep(double t);
   // The plan is complete: the cleaning starts (at t).

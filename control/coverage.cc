@@ -7,6 +7,8 @@
 #include <cmath>
 #include <limits>
 
+#include "control/room_geometry.h"
+
 namespace irslam::control {
 
 options::Table<CleaningOptions> CleaningKeys() {
@@ -47,6 +49,9 @@ options::Table<CleaningOptions> CleaningKeys() {
       {"front_stop_m", &O::front_stop_m, 0, 1, "m",
        "an unmapped obstacle ahead within the robot radius plus this: plan round it"},
       {"coverage_cell_m", &O::coverage_cell_m, 0.01, 0.5, "m", "grid of the covered-floor estimate"},
+      {"resume_overlap", &O::resume_overlap, 0.5, 1, "",
+       "resuming a cleaning: a cell of the new plan at least this share inside the cells done before is "
+       "done (the plan may be cut differently: contacts and objects change)"},
       {"stuck_s", &O::stuck_s, 1, 3600, "s",
        "no 0.1 m of progress for this long while cleaning: the route point is given up"},
       {"max_goal_failures", &O::max_goal_failures, 1, 1000, "",
@@ -281,6 +286,31 @@ void CoverageGrid::Mark(const Eigen::Vector2d& p) {
       const double x = room_.xmin + (i + 0.5) * cell_m_, y = room_.ymin + (j + 0.5) * cell_m_;
       uint8_t& st = state_[static_cast<size_t>(j) * static_cast<size_t>(nx_) + static_cast<size_t>(i)];
       if (st == 1 && std::hypot(x - p.x(), y - p.y()) <= r) {
+        st = 2;
+        ++covered_;
+      }
+    }
+  }
+}
+
+void CoverageGrid::MarkInside(const std::vector<Eigen::Vector2d>& polygon) {
+  if (nx_ == 0 || ny_ == 0 || polygon.size() < 3) return;
+  double xmin = polygon[0].x(), xmax = xmin, ymin = polygon[0].y(), ymax = ymin;
+  for (const auto& q : polygon) {
+    xmin = std::min(xmin, q.x());
+    xmax = std::max(xmax, q.x());
+    ymin = std::min(ymin, q.y());
+    ymax = std::max(ymax, q.y());
+  }
+  const int i0 = std::max(0, static_cast<int>((xmin - room_.xmin) / cell_m_));
+  const int i1 = std::min(nx_ - 1, static_cast<int>((xmax - room_.xmin) / cell_m_));
+  const int j0 = std::max(0, static_cast<int>((ymin - room_.ymin) / cell_m_));
+  const int j1 = std::min(ny_ - 1, static_cast<int>((ymax - room_.ymin) / cell_m_));
+  for (int i = i0; i <= i1; ++i) {
+    for (int j = j0; j <= j1; ++j) {
+      uint8_t& st = state_[static_cast<size_t>(j) * static_cast<size_t>(nx_) + static_cast<size_t>(i)];
+      const Eigen::Vector2d c(room_.xmin + (i + 0.5) * cell_m_, room_.ymin + (j + 0.5) * cell_m_);
+      if (st == 1 && room_geometry::InsidePolygon(polygon, c)) {
         st = 2;
         ++covered_;
       }

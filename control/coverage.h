@@ -50,6 +50,8 @@ struct CleaningOptions {
   double front_stop_m = 0.08;      // an unmapped obstacle ahead within the robot radius + this
                                    // (and short of where the lane ends): plan round it
   double coverage_cell_m = 0.05;   // grid of the covered-floor estimate
+  double resume_overlap = 0.9;     // resuming: a planned cell at least this share inside the
+                                   // cells done before is done
   double stuck_s = 20;             // no 0.1 m of progress for this long: the route point is given up
   int max_goal_failures = 4;       // route points given up in a row: the rest of the cell is given up
   double max_time_s = 3600;        // cleaning plus going home, robot time
@@ -118,8 +120,11 @@ CoveragePlan PlanCoverage(const Box& room, const std::vector<Box>& objects,
 // four candidate routes.
 class CoveragePlanner {
  public:
+  // lanes_along_x: plan that orientation only (a resumed cleaning keeps the
+  // one it was planned in); none: both_directions decides.
   void Start(const Box& room, const std::vector<Box>& objects, const std::vector<Eigen::Vector2d>& bumps,
-             const Eigen::Vector2d& start, double robot_radius_m, const CleaningOptions& options);
+             const Eigen::Vector2d& start, double robot_radius_m, const CleaningOptions& options,
+             std::optional<bool> lanes_along_x = std::nullopt);
   // One piece of the work; true when the plan is complete (and from then on).
   bool Step();
   bool done() const { return stage_ == Stage::kDone; }
@@ -142,6 +147,7 @@ class CoveragePlanner {
   CleaningOptions options_;
   Stage stage_ = Stage::kIdle;
   bool swap_ = false;               // the orientation being planned (false: lanes along y)
+  bool one_orientation_ = false;    // Start's lanes_along_x: swap_ only
   CoveragePlan plan_;               // of this orientation
   std::optional<CoveragePlan> along_y_;  // the first orientation's, when both are planned
   Eigen::Vector2d oriented_start_ = Eigen::Vector2d::Zero();
@@ -165,6 +171,8 @@ class CoverageGrid {
   void AddTarget(const Box& free_rect);
   // The body disc at p (radius body_radius_m) cleans the floor under it.
   void Mark(const Eigen::Vector2d& p);
+  // Every target cell whose centre lies inside `polygon` is covered.
+  void MarkInside(const std::vector<Eigen::Vector2d>& polygon);
   double total_m2() const { return target_ * cell_m_ * cell_m_; }
   double covered_m2() const { return covered_ * cell_m_ * cell_m_; }
 

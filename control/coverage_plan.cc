@@ -167,14 +167,15 @@ CoveragePlan PlanCoverage(const Box& room, const std::vector<Box>& objects,
 
 void CoveragePlanner::Start(const Box& room, const std::vector<Box>& objects,
                             const std::vector<Eigen::Vector2d>& bumps, const Eigen::Vector2d& start, double radius,
-                            const CleaningOptions& o) {
+                            const CleaningOptions& o, std::optional<bool> lanes_along_x) {
   room_ = room;
   objects_ = objects;
   bumps_ = bumps;
   start_ = start;
   radius_m_ = radius;
   options_ = o;
-  swap_ = false;
+  swap_ = lanes_along_x.value_or(false);
+  one_orientation_ = lanes_along_x.has_value();
   plan_ = {};
   along_y_.reset();
   steps_ = 0;
@@ -234,7 +235,7 @@ bool CoveragePlanner::Step() {
 }
 
 void CoveragePlanner::EndOrientation() {
-  if (!swap_ && options_.both_directions) {
+  if (!swap_ && options_.both_directions && !one_orientation_) {
     along_y_ = std::move(plan_);
     plan_ = {};
     swap_ = true;

@@ -120,6 +120,7 @@ InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options,
   const double io_dt = 0.002;
   double next_tick = options.period_s;
   bool started = false;
+  bool restarted = false;
   std::vector<can_frame> frames, faulty;
   for (run.t = 0; run.t < max_time_s;) {
     run.t += io_dt;
@@ -156,6 +157,12 @@ InProcessRun RunInProcess(const World& world, const robot::CoreOptions& options,
     for (const can_frame& f : out) run.sim->HandleFrame(f);
     if (on_tick) on_tick(run);
     if (setup.stop_when && setup.stop_when(run)) break;
+    if (!restarted && setup.stop_and_start_when && setup.stop_and_start_when(run)) {
+      restarted = true;
+      run.core->Stop(run.t);
+      if (!run.core->Start(run.t, &run.error)) return run;
+      continue;
+    }
     const auto s = run.core->state();
     if (started && (s == control::MissionState::kDone || s == control::MissionState::kIdle)) break;
   }

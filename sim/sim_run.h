@@ -38,6 +38,10 @@ struct RunSetup {
   std::optional<robot::MapSnapshot> saved_map;
   // Checked after every control period (after on_tick): true ends the run there.
   std::function<bool(const InProcessRun&)> stop_when;
+  // Checked after every control period until it is first true: then the
+  // mission is stopped and started again at once, as a client's stop and
+  // start do (the core keeps its map: RobotCore::Start continues in it).
+  std::function<bool(const InProcessRun&)> stop_and_start_when;
 };
 
 // Runs until the mission is done or idle again, or max_time_s of robot time.

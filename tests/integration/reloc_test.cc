@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <random>
 
@@ -224,6 +225,78 @@ TEST(RelocTest, CleaningStoppedAfterTwoCellsResumesTheRestInTheSavedMap) {
   // The second mission swept only what was left: its cleaning path is well
   // under a whole cleaning's (the first mission's two cells are not driven again).
   EXPECT_GT(c->fraction, 0.9);
+}
+
+// Issue 13's resume as the daemon's users do it (clean_e2e's StopAndStart):
+// stop and start once cleaning began (the mission continues in its live map),
+// stop again a cell later, then a mission from elsewhere relocalises in the
+// saved map. Every cell done before must still be done in the plan it cleans
+// by, over worlds and seeds (RESUME_RUNS seeds per world; 3 by default).
+TEST(RelocTest, StopStartAndRelocaliseKeepTheCellsDoneOverWorldsAndSeeds) {
+  robot::CoreOptions options = robot::DefaultCoreOptions();
+  options.mission.mode = "clean";
+  const int seeds = std::getenv("RESUME_RUNS") ? std::atoi(std::getenv("RESUME_RUNS")) : 3;
+  int runs = 0, kept = 0, not_committed = 0;
+  for (const char* name : {"fig14", "fig16", "fig17", "fig18", "fig19", "fig20"}) {
+    const sim::World world = testing::LoadTestWorld(name);
+    for (int seed = 1; seed <= seeds; ++seed) {
+      SCOPED_TRACE(std::string(name) + " seed " + std::to_string(seed));
+      const auto cleaning = [](const sim::InProcessRun& run) { return run.core->Status(run.t).cleaning; };
+      int done_at_restart = -1;
+      sim::RunSetup first;
+      first.stop_and_start_when = [&](const sim::InProcessRun& run) {
+        const auto c = cleaning(run);
+        if (!c || c->cells_done < 1 || c->cells_total < 3) return false;
+        done_at_restart = c->cells_done;
+        return true;
+      };
+      first.stop_when = [&](const sim::InProcessRun& run) {
+        const auto c = cleaning(run);
+        return done_at_restart >= 0 && c && c->cells_done > done_at_restart;
+      };
+      sim::InProcessRun a = sim::RunInProcess(world, options, static_cast<uint64_t>(seed), 3000, nullptr,
+                                              nullptr, nullptr, first);
+      if (done_at_restart < 0) continue;  // fewer than 3 cells, or none done: nothing to resume
+      a.core->Stop(a.t);
+      const robot::MapSnapshot saved = a.core->Map();
+      ASSERT_TRUE(saved.cleaning);
+      if (saved.cleaning->cells_done <= done_at_restart) continue;  // the mission ended first
+      std::mt19937_64 rng(static_cast<uint64_t>(seed) * 7919);
+      sim::World w = world;
+      w.start = RandomFreePose(world, &rng);
+      sim::RunSetup second;
+      second.saved_map = saved;
+      second.stop_when = [&](const sim::InProcessRun& run) {
+        const auto st = run.core->Status(run.t);
+        return st.mission.state == control::MissionState::kClean && st.mission.reason.rfind("cleaning ", 0) == 0;
+      };
+      sim::InProcessRun b = sim::RunInProcess(w, options, static_cast<uint64_t>(seed) + 100, 2000, nullptr,
+                                              nullptr, nullptr, second);
+      const auto c = cleaning(b);
+      ASSERT_TRUE(c) << b.core->Status(b.t).mission.reason;
+      const auto reloc = b.core->Status(b.t).relocalize;
+      if (!reloc || !reloc->committed) {
+        ++not_committed;  // a fresh map: nothing done in it (the relocalisation's own rate: docs)
+        continue;
+      }
+      ++runs;
+      const bool ok = c->cells_done >= saved.cleaning->cells_done;
+      kept += ok;
+      if (!ok) {
+        std::printf("%s seed %d: saved %d of %d cells, resumed %s, %d of %d\n", name, seed,
+                    saved.cleaning->cells_done, saved.cleaning->cells_total,
+                    b.core->Status(b.t).mission.reason.c_str(), c->cells_done, c->cells_total);
+      }
+    }
+  }
+  std::printf("resume: %d of %d runs kept every cell done (%d more did not relocalise)\n", kept, runs,
+              not_committed);
+  EXPECT_GE(runs, 3 * seeds);
+  // Measured with RESUME_RUNS=20: 75 of 77 (fig16 seed 1: its first plan was
+  // cut round a contact, which is not saved, and the strip planned instead is
+  // 76 % inside the cells done; fig14 seed 20 likewise). Before the overlap and
+  // the kept orientation, RESUME_RUNS=10: 31 of 38.
+  EXPECT_GE(kept, runs - 1);
 }
 
 // The robot lifted and put down elsewhere (the simulator's kidnap fault) while

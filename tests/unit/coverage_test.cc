@@ -307,6 +307,48 @@ TEST(CoveragePlannerTest, StepByStepMakesExactlyTheOneShotPlan) {
   }
 }
 
+// A resumed cleaning keeps the orientation its plan had (Clean reads it from
+// the saved routes): the planner plans only that one, even where the other is
+// shorter.
+TEST(CoveragePlannerTest, AGivenOrientationIsTheOnlyOnePlanned) {
+  const Box room{0, 0, 6, 2};
+  CleaningOptions both = Options();
+  both.both_directions = true;
+  for (const bool along_x : {false, true}) {
+    CoveragePlanner planner;
+    planner.Start(room, {}, {}, {1, 1}, kRadius, both, along_x);
+    int steps = 0;
+    while (!planner.Step()) ASSERT_LT(++steps, 10000);
+    const CoveragePlan p = planner.Take();
+    EXPECT_EQ(p.swapped, along_x);
+    CleaningOptions one = Options();
+    one.both_directions = false;
+    const CoveragePlan along_y = PlanCoverage(room, {}, {}, {1, 1}, kRadius, one);
+    if (!along_x) ExpectSamePlan(p, along_y);
+  }
+  // Without one, both are planned and the shorter (along x here) is kept.
+  CoveragePlanner planner;
+  planner.Start(room, {}, {}, {1, 1}, kRadius, both);
+  while (!planner.Step()) {
+  }
+  EXPECT_TRUE(planner.Take().swapped);
+}
+
+TEST(CoverageTest, MarkInsideCoversTheTargetUnderAPolygonAndNothingElse) {
+  const CoveragePlan p = PlanCoverage({0, 0, 4, 3}, {}, {}, {1, 1}, kRadius, Options());
+  CoverageGrid g;
+  g.Init({0, 0, 4, 3}, p.FreeRects(), 0.17, 0.02);
+  // An L: 2 x 1 and 1 x 1 more, well inside the target.
+  g.MarkInside({{1, 1}, {3, 1}, {3, 2}, {2, 2}, {2, 2.5}, {1, 2.5}});
+  EXPECT_NEAR(g.covered_m2(), 2 * 1 + 1 * 0.5, 0.05);
+  const double once = g.covered_m2();
+  g.MarkInside({{1, 1}, {3, 1}, {3, 2}, {1, 2}});  // inside what is covered: nothing new
+  EXPECT_EQ(g.covered_m2(), once);
+  g.MarkInside({{-5, -5}, {-4, -5}, {-4, -4}});  // outside the room
+  g.MarkInside({{1, 1}, {2, 1}});                // not a polygon
+  EXPECT_EQ(g.covered_m2(), once);
+}
+
 TEST(CoveragePlannerTest, ARoomWithNoFreeFloorIsAnEmptyPlanInAFewSteps) {
   CoveragePlanner planner;
   planner.Start({0, 0, 0.3, 0.3}, {}, {}, {0.15, 0.15}, kRadius, CleaningOptions{});
