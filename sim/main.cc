@@ -5,7 +5,6 @@
 //   irslam-sim serve --can IFACE --world W.json [--seed S] [--time-scale K] [--truth-out truth.json]
 //                    [--realtime-priority N]
 #include <pthread.h>
-#include <sched.h>
 
 #include <CLI/CLI.hpp>
 #include <boost/asio/io_context.hpp>
@@ -15,7 +14,6 @@
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <memory>
@@ -27,6 +25,7 @@
 #include "daemon/core_json.h"
 #include "daemon/map_pgm.h"
 #include "daemon/map_svg.h"
+#include "daemon/realtime.h"
 #include "drivers/can_bus.h"
 #include "proto/codec.h"
 #include "io/json_text.h"
@@ -407,15 +406,11 @@ constexpr double kStallS = 0.010;
 // --realtime-priority: SCHED_FIFO for the simulator's thread (sched(7)), so
 // that a loaded test host cannot starve the simulated hardware. Refused (no
 // CAP_SYS_NICE, RLIMIT_RTPRIO too low) it says why and keeps normal scheduling.
+// The daemon's own call (daemon/realtime.h): SCHED_RESET_ON_FORK included.
 void SetRealtime(int priority) {
   if (priority <= 0) return;
-  sched_param p{};
-  p.sched_priority = priority;
-  const int err = ::pthread_setschedparam(pthread_self(), SCHED_FIFO | SCHED_RESET_ON_FORK, &p);
-  if (err != 0) {
-    std::fprintf(stderr, "irslam-sim: SCHED_FIFO %d refused (%s): normal scheduling\n", priority,
-                 std::strerror(err));
-  }
+  const ThreadScheduling s = SetThreadScheduling(pthread_self(), priority);
+  if (!s.realtime) std::fprintf(stderr, "irslam-sim: scheduling %s\n", s.Describe(priority).c_str());
 }
 
 int Serve(const Common& c, const std::string& iface, double time_scale, int realtime_priority) {
