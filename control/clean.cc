@@ -82,6 +82,7 @@ void Clean::Begin(double t, const slam::Slam& slam, const EnvironmentModel& m, c
   plan_ = {};
   resume_ = std::move(resume);
   resumed_cells_ = 0;
+  match_ = {};
   if (resume_) {
     // Until planned, the cells done before are the progress (a stop now keeps them).
     progress_.cells = resume_->cells;
@@ -168,15 +169,11 @@ double Clean::PlanStep(double t) {
     }
     case PlanStage::kResume: {
       // A cleaning stopped before (not finished) goes on with the cells it
-      // left: each planned cell is matched against the cells done then (one a
-      // step), then what each of those swept is marked (one a step).
-      const size_t i = stage_next_++;
-      if (i < progress_.cells.size()) {
-        double work = 0;
-        resumed_cells_ += ResumeCell(i, *resume_, &work);
-        return work;
-      }
-      const size_t k = i - progress_.cells.size();
+      // left: each planned cell is matched against the cells done then (a
+      // lattice column a step), then what each of those swept is marked (one a
+      // step).
+      if (stage_next_ < progress_.cells.size()) return ResumeStep(*resume_);
+      const size_t k = stage_next_++ - progress_.cells.size();
       if (k >= resume_->cells.size()) {
         Started(t);
         return 1;
@@ -267,40 +264,52 @@ bool Overlaps(const Box& a, const Box& b) {
 
 }  // namespace
 
-bool Clean::ResumeCell(size_t i, const CleaningProgress& before, double* work) {
+double Clean::ResumeStep(const CleaningProgress& before) {
   // The plan may be cut differently from the one stopped (contacts are not
   // saved; an object seen again may have changed): a cell is done when most of
   // it lies inside the cells done then, sampled on a lattice twice the
-  // coverage grid's cell.
-  auto& pc = progress_.cells[i];
-  if (pc.polygon.size() < 3) return false;
-  const Box box = BoundsOf(pc.polygon);
-  std::vector<const std::vector<Eigen::Vector2d>*> done;
-  double vertices = static_cast<double>(pc.polygon.size());
-  for (const auto& b : before.cells) {
-    if (!b.done || b.polygon.size() < 3 || !Overlaps(BoundsOf(b.polygon), box)) continue;
-    done.push_back(&b.polygon);
-    vertices += static_cast<double>(b.polygon.size());
-  }
-  const double step = 2 * options_.coverage_cell_m;
-  const int nx = static_cast<int>(box.width() / step) + 1, ny = static_cast<int>(box.height() / step) + 1;
-  *work = static_cast<double>(nx) * ny * vertices;
-  if (done.empty()) return false;
-  long inside = 0, inside_done = 0;
-  for (int a = 0; a < nx; ++a) {
-    for (int b = 0; b < ny; ++b) {
-      const Eigen::Vector2d p(box.xmin + (a + 0.5) * step, box.ymin + (b + 0.5) * step);
-      if (!room_geometry::InsidePolygon(pc.polygon, p)) continue;
-      ++inside;
-      inside_done += std::any_of(done.begin(), done.end(),
-                                 [&](const auto* d) { return room_geometry::InsidePolygon(*d, p); });
+  // coverage grid's cell, a column of it per step.
+  auto& pc = progress_.cells[stage_next_];
+  if (match_.column == 0) {
+    match_ = {};
+    if (pc.polygon.size() < 3) {
+      ++stage_next_;
+      return 1;
+    }
+    match_.box = BoundsOf(pc.polygon);
+    match_.vertices = static_cast<double>(pc.polygon.size());
+    for (const auto& b : before.cells) {
+      if (!b.done || b.polygon.size() < 3 || !Overlaps(BoundsOf(b.polygon), match_.box)) continue;
+      match_.done.push_back(&b.polygon);
+      match_.vertices += static_cast<double>(b.polygon.size());
+    }
+    if (match_.done.empty()) {
+      ++stage_next_;
+      return static_cast<double>(before.cells.size()) + 1;
     }
   }
-  if (inside == 0 || static_cast<double>(inside_done) < options_.resume_overlap * static_cast<double>(inside))
-    return false;
-  pc.done = true;
-  ++progress_.cells_done;
-  return true;
+  const double step = 2 * options_.coverage_cell_m;
+  const Box& box = match_.box;
+  const int nx = static_cast<int>(box.width() / step) + 1, ny = static_cast<int>(box.height() / step) + 1;
+  const double x = box.xmin + (match_.column + 0.5) * step;
+  for (int b = 0; b < ny; ++b) {
+    const Eigen::Vector2d p(x, box.ymin + (b + 0.5) * step);
+    if (!room_geometry::InsidePolygon(pc.polygon, p)) continue;
+    ++match_.inside;
+    match_.inside_done += std::any_of(match_.done.begin(), match_.done.end(),
+                                      [&](const auto* d) { return room_geometry::InsidePolygon(*d, p); });
+  }
+  const double work = static_cast<double>(ny) * match_.vertices;
+  if (++match_.column < nx) return work;
+  if (match_.inside > 0 &&
+      static_cast<double>(match_.inside_done) >= options_.resume_overlap * static_cast<double>(match_.inside)) {
+    pc.done = true;
+    ++progress_.cells_done;
+    ++resumed_cells_;
+  }
+  match_ = {};
+  ++stage_next_;
+  return work;
 }
 
 double Clean::MarkSwept(const CleaningProgress::Cell& before) {

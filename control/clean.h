@@ -116,9 +116,10 @@ class Clean {
   // the cells done before (one per step).
   enum class PlanStage { kNone, kCoverage, kGrid, kCells, kResume };
   // Whether the planned cell i was done in `before` (its route then marks the grid).
-  // Resuming: planned cell i is done if it lies mostly inside the cells done
-  // before (CleaningOptions::resume_overlap); *work: the planning it took.
-  bool ResumeCell(size_t i, const CleaningProgress& before, double* work);
+  // Resuming: a piece of matching planned cell stage_next_ against the cells
+  // done before (it is done if at least CleaningOptions::resume_overlap of it
+  // lies inside them): one lattice column; the work it took.
+  double ResumeStep(const CleaningProgress& before);
   // Resuming: what a cell done before swept counts as covered; the work.
   double MarkSwept(const CleaningProgress::Cell& before);
   // One piece of the planning; returns its work (CleaningOptions::plan_work_per_period).
@@ -157,6 +158,17 @@ class Clean {
   size_t stage_next_ = 0;         // the next rectangle or cell of the stage
   std::optional<CleaningProgress> resume_;
   int resumed_cells_ = 0;
+  // The planned cell being matched (ResumeStep): its bounds, the outlines of
+  // the cells done before that may overlap it (in resume_), the lattice column
+  // next, and the lattice points inside it and inside those so far.
+  struct Match {
+    Box box;
+    std::vector<const std::vector<Eigen::Vector2d>*> done;
+    double vertices = 0;
+    int column = 0;
+    long inside = 0, inside_done = 0;
+  };
+  Match match_;
   CoverageGrid grid_;
   CleaningProgress progress_;
   Phase phase_ = Phase::kDone;

@@ -74,7 +74,7 @@ Twist Clean::Follow(const Pose2& me, const RangeScan& scan, bool* blocked, bool*
     const auto& m = mounts_[i];
     const double hx = m.x + *scan.range_m[i] * std::cos(m.theta);
     const double hy = m.y + *scan.range_m[i] * std::sin(m.theta);
-    if (hx > 0 && std::abs(hy) < radius_m_ && hx < radius_m_ + o.front_stop_m &&
+    if (hx > kAheadM && std::abs(hy) < radius_m_ && hx < radius_m_ + o.front_stop_m &&
         hx < rest + radius_m_ + std::min(o.clearance_m, o.edge_clearance_m) - 0.05)
       *blocked = true;
   }

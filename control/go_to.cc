@@ -237,7 +237,10 @@ std::optional<double> GoTo::Front(const RangeScan& scan, const WallFollower& fol
     const auto& m = mounts_[i];
     const double hx = m.x + *scan.range_m[i] * std::cos(m.theta);
     const double hy = m.y + *scan.range_m[i] * std::sin(m.theta);
-    if (hx > 0 && std::hypot(hx, hy) < radius_m_ + options_.near_obstacle_m) {
+    // Ahead of the centre: the side sensors' beams (at +-90 degrees) have an x
+    // of 1e-17 m from rounding and are not ahead (before 2026-12-03 they were:
+    // a contact remembered beside the robot blocked it for good, docs/reliability.md).
+    if (hx > kAheadM && std::hypot(hx, hy) < radius_m_ + options_.near_obstacle_m) {
       const double d = std::hypot(hx, hy) + options_.near_obstacle_offset_m;
       if (!front || d < *front) front = d;
     }

@@ -12,6 +12,11 @@ namespace irslam {
 
 inline constexpr int kNumIrSensors = 7;
 
+// A beam's hit is ahead of the robot's centre when its x (robot frame) exceeds
+// this: the side beams, mounted at +-90 degrees, have an x of about 1e-17 m
+// from rounding and are beside the robot, not ahead.
+inline constexpr double kAheadM = 1e-3;
+
 // Bumper bits (CTRL_STATUS.Bumpers on the bus, and the GPIO bumpers).
 inline constexpr uint8_t kBumperLeft = 1 << 0;
 inline constexpr uint8_t kBumperRight = 1 << 1;

@@ -48,13 +48,15 @@ TEST_P(CleanWorldTest, CleansTheReachableFloorAndReturnsHome) {
 INSTANTIATE_TEST_SUITE_P(PaperWorlds, CleanWorldTest,
                          // Measured (seed 1, default configuration, docs/cleaning.md): fig14
                          // 92.0 %, 1.68, 7.9 cm; fig20 91.3 %, 1.72, 2.4 cm; free_start 93.9 %,
-                         // 1.51, 3.0 cm; corner_start 85.0 %, 1.34, 1.7 cm with one of four
-                         // cells given up (lanes 0.30 m apart; at 0.28 m it was 93.5 % and
-                         // all four: one seed's luck either way, docs/cleaning.md has the
-                         // 40-run set). fig16, fig18, fig19: one contact each, not asserted.
+                         // 1.51, 3.0 cm; corner_start 92.8 %, 1.47, 2.9 cm, all four cells
+                         // (until 2026-12-03 85.0 %, 1.34 with one of four given up, and seed 3
+                         // all four; since the go-to's side-beam fix the other way round: one
+                         // seed's luck either way, docs/cleaning.md has the 40-run set; the
+                         // path ratio with all four cells is 1.47 on seeds 1-3). fig16, fig18,
+                         // fig19: one contact each, not asserted.
                          ::testing::Values(Floor{"fig14", 0.91, 1.75, 0.09}, Floor{"fig20", 0.90, 1.8, 0.04},
                                            Floor{"free_start", 0.93, 1.6, 0.04},
-                                           Floor{"corner_start", 0.84, 1.45, 0.03, 1}),
+                                           Floor{"corner_start", 0.84, 1.52, 0.03, 1}),
                          [](const ::testing::TestParamInfo<Floor>& p) { return std::string(p.param.world); });
 
 TEST(CleanModeTest, PlannedCleaningBeatsRandomBounceOverTheSameTime) {

@@ -296,7 +296,7 @@ TEST(RelocTest, StopStartAndRelocaliseKeepTheCellsDoneOverWorldsAndSeeds) {
   // cut round a contact, which is not saved, and the strip planned instead is
   // 76 % inside the cells done; fig14 seed 20 likewise). Before the overlap and
   // the kept orientation, RESUME_RUNS=10: 31 of 38.
-  EXPECT_GE(kept, runs - 1);
+  EXPECT_GE(kept, runs - std::max(1, runs / 20));
 }
 
 // The robot lifted and put down elsewhere (the simulator's kidnap fault) while

@@ -34,6 +34,29 @@ TEST(GoToTest, PlansAndDrivesStraightAtAGoalAhead) {
   EXPECT_DOUBLE_EQ(res.twist.omega, 0);
 }
 
+// Something touching the robot's side (a contact remembered there reads as a
+// short range on the side beam) is beside it, not ahead: the robot drives on.
+// The side beams at +-90 degrees have an x of 1e-17 m from rounding; until
+// 2026-12-03 that counted as ahead, and a robot that had touched an object with
+// its side held still with a clear path until the no-progress limit.
+TEST(GoToTest, ACloseReadingBesideTheRobotDoesNotBlockItAheadDoes) {
+  for (const int sensor : {0, 6, 1}) {
+    Rig r;
+    GoTo g({}, r.o.slam.geometry, r.o.slam.mounts);
+    ASSERT_TRUE(g.TryGoal(0, {2, 0}, 0, true, r.slam, r.bumps));
+    g.Begin(0);
+    RangeScan scan;
+    scan.range_m[static_cast<size_t>(sensor)] = 0.08;
+    const GoTo::Result res = g.Step(0, r.slam, scan, 0, r.bumps, r.follower);
+    EXPECT_EQ(res.status, GoTo::Status::kDriving);
+    if (sensor == 1) {
+      EXPECT_EQ(res.twist.v, 0) << "front right, 8 cm: ahead";
+    } else {
+      EXPECT_GT(res.twist.v, 0.1) << "sensor " << sensor << " (beside)";
+    }
+  }
+}
+
 TEST(GoToTest, GivesUpAfterTheStuckTime) {
   for (double stuck : {25.0, 10.0}) {
     Rig r;
