@@ -247,19 +247,10 @@ void Clean::SkipDone() {
 
 namespace {
 
-Box BoundsOf(const std::vector<Eigen::Vector2d>& p) {
-  Box b{p[0].x(), p[0].y(), p[0].x(), p[0].y()};
-  for (const auto& q : p) {
-    b.xmin = std::min(b.xmin, q.x());
-    b.ymin = std::min(b.ymin, q.y());
-    b.xmax = std::max(b.xmax, q.x());
-    b.ymax = std::max(b.ymax, q.y());
-  }
-  return b;
-}
-
+// Boxes that share some area.
 bool Overlaps(const Box& a, const Box& b) {
-  return a.xmin < b.xmax && b.xmin < a.xmax && a.ymin < b.ymax && b.ymin < a.ymax;
+  return room_geometry::Overlap1d(a.xmin, a.xmax, b.xmin, b.xmax) > 0 &&
+         room_geometry::Overlap1d(a.ymin, a.ymax, b.ymin, b.ymax) > 0;
 }
 
 }  // namespace
@@ -276,10 +267,11 @@ double Clean::ResumeStep(const CleaningProgress& before) {
       ++stage_next_;
       return 1;
     }
-    match_.box = BoundsOf(pc.polygon);
+    match_.box = room_geometry::PolygonBounds(pc.polygon);
     match_.vertices = static_cast<double>(pc.polygon.size());
     for (const auto& b : before.cells) {
-      if (!b.done || b.polygon.size() < 3 || !Overlaps(BoundsOf(b.polygon), match_.box)) continue;
+      if (!b.done || b.polygon.size() < 3) continue;
+      if (!Overlaps(room_geometry::PolygonBounds(b.polygon), match_.box)) continue;
       match_.done.push_back(&b.polygon);
       match_.vertices += static_cast<double>(b.polygon.size());
     }
@@ -317,8 +309,9 @@ double Clean::MarkSwept(const CleaningProgress::Cell& before) {
   // a cell saved without its route: its outline.
   const auto& r = before.route;
   if (r.size() < 2) {
+    if (before.polygon.size() < 3) return 1;  // neither: nothing to mark
     grid_.MarkInside(before.polygon);
-    const Box b = BoundsOf(before.polygon);
+    const Box b = room_geometry::PolygonBounds(before.polygon);
     return (b.width() / options_.coverage_cell_m + 2) * (b.height() / options_.coverage_cell_m + 2) *
            static_cast<double>(before.polygon.size() + 1);
   }

@@ -113,9 +113,8 @@ class Clean {
   enum class Phase { kPlanGoal, kTransit, kSweep, kDone };
   // Planning, in this order: the coverage plan (CoveragePlanner), the
   // covered-floor grid (a few free rectangles per step), the progress's cells,
-  // the cells done before (one per step).
+  // the cells done before (ResumeStep, then MarkSwept).
   enum class PlanStage { kNone, kCoverage, kGrid, kCells, kResume };
-  // Whether the planned cell i was done in `before` (its route then marks the grid).
   // Resuming: a piece of matching planned cell stage_next_ against the cells
   // done before (it is done if at least CleaningOptions::resume_overlap of it
   // lies inside them): one lattice column; the work it took.

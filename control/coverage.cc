@@ -295,17 +295,11 @@ void CoverageGrid::Mark(const Eigen::Vector2d& p) {
 
 void CoverageGrid::MarkInside(const std::vector<Eigen::Vector2d>& polygon) {
   if (nx_ == 0 || ny_ == 0 || polygon.size() < 3) return;
-  double xmin = polygon[0].x(), xmax = xmin, ymin = polygon[0].y(), ymax = ymin;
-  for (const auto& q : polygon) {
-    xmin = std::min(xmin, q.x());
-    xmax = std::max(xmax, q.x());
-    ymin = std::min(ymin, q.y());
-    ymax = std::max(ymax, q.y());
-  }
-  const int i0 = std::max(0, static_cast<int>((xmin - room_.xmin) / cell_m_));
-  const int i1 = std::min(nx_ - 1, static_cast<int>((xmax - room_.xmin) / cell_m_));
-  const int j0 = std::max(0, static_cast<int>((ymin - room_.ymin) / cell_m_));
-  const int j1 = std::min(ny_ - 1, static_cast<int>((ymax - room_.ymin) / cell_m_));
+  const Box b = room_geometry::PolygonBounds(polygon);
+  const int i0 = std::max(0, static_cast<int>((b.xmin - room_.xmin) / cell_m_));
+  const int i1 = std::min(nx_ - 1, static_cast<int>((b.xmax - room_.xmin) / cell_m_));
+  const int j0 = std::max(0, static_cast<int>((b.ymin - room_.ymin) / cell_m_));
+  const int j1 = std::min(ny_ - 1, static_cast<int>((b.ymax - room_.ymin) / cell_m_));
   for (int i = i0; i <= i1; ++i) {
     for (int j = j0; j <= j1; ++j) {
       uint8_t& st = state_[static_cast<size_t>(j) * static_cast<size_t>(nx_) + static_cast<size_t>(i)];

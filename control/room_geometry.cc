@@ -127,4 +127,15 @@ bool InsidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector
   return in;
 }
 
+Box PolygonBounds(const std::vector<Eigen::Vector2d>& poly) {
+  Box b{poly[0].x(), poly[0].y(), poly[0].x(), poly[0].y()};
+  for (const auto& q : poly) {
+    b.xmin = std::min(b.xmin, q.x());
+    b.ymin = std::min(b.ymin, q.y());
+    b.xmax = std::max(b.xmax, q.x());
+    b.ymax = std::max(b.ymax, q.y());
+  }
+  return b;
+}
+
 }  // namespace irslam::control::room_geometry

@@ -56,6 +56,9 @@ Box FaceBox(const std::vector<Side>& sides, const std::vector<size_t>& group, co
 // Even-odd rule.
 bool InsidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p);
 
+// The axis-aligned bounds of a polygon (at least one point).
+Box PolygonBounds(const std::vector<Eigen::Vector2d>& poly);
+
 }  // namespace irslam::control::room_geometry
 
 #endif  // IRSLAM_CONTROL_ROOM_GEOMETRY_H_

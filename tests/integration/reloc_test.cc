@@ -227,6 +227,39 @@ TEST(RelocTest, CleaningStoppedAfterTwoCellsResumesTheRestInTheSavedMap) {
   EXPECT_GT(c->fraction, 0.9);
 }
 
+// A saved map's cleaning may hold a done cell with neither outline nor route
+// (the map reader accepts empty point lists): resuming skips it instead of
+// reading past its outline.
+TEST(RelocTest, ADoneCellWithoutOutlineOrRouteIsSkippedOnResume) {
+  const sim::World world = testing::LoadTestWorld("fig14");
+  robot::CoreOptions options = robot::DefaultCoreOptions();
+  options.mission.mode = "clean";
+  sim::RunSetup first;
+  first.stop_when = [](const sim::InProcessRun& run) {
+    const auto c = run.core->Status(run.t).cleaning;
+    return c && c->cells_done >= 1;
+  };
+  sim::InProcessRun a = sim::RunInProcess(world, options, 1, 2000, nullptr, nullptr, nullptr, first);
+  a.core->Stop(a.t);
+  robot::MapSnapshot saved = a.core->Map();
+  ASSERT_TRUE(saved.cleaning);
+  control::CleaningProgress::Cell empty;
+  empty.id = 99;
+  empty.done = true;
+  saved.cleaning->cells.push_back(empty);
+  sim::RunSetup second;
+  second.saved_map = saved;
+  second.stop_when = [](const sim::InProcessRun& run) {
+    const auto c = run.core->Status(run.t).cleaning;
+    return c && c->cells_total > 0 && run.core->Status(run.t).mission.reason.rfind("cleaning ", 0) == 0;
+  };
+  sim::InProcessRun b = sim::RunInProcess(world, options, 2, 2000, nullptr, nullptr, nullptr, second);
+  const auto c = b.core->Status(b.t).cleaning;
+  ASSERT_TRUE(c) << b.core->Status(b.t).mission.reason;
+  EXPECT_GE(c->cells_done, 1);
+  EXPECT_GT(c->covered_m2, 0);
+}
+
 // Issue 13's resume as the daemon's users do it (clean_e2e's StopAndStart):
 // stop and start once cleaning began (the mission continues in its live map),
 // stop again a cell later, then a mission from elsewhere relocalises in the
