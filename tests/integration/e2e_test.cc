@@ -107,11 +107,13 @@ class E2eTest : public ::testing::Test {
   std::string StateDir() const { return dir_ + "/state"; }
 
   // The test rig's config: the defaults, except that the controller-silence limit is
-  // 100 ms of *wall* time (not robot time) at any time scale, so a loaded host (ASan,
-  // ctest -j2) does not see short scheduling stalls as a lost controller. Tests of the
-  // silence fault itself set it explicitly.
+  // 300 ms of *wall* time (not robot time) at any time scale, so a loaded host (ASan,
+  // ctest -j2) or the VM suite's software emulation does not see the simulator's
+  // scheduling stalls as a lost controller (it was 100 ms until 2026-12-03: the VM
+  // suite in CI and locally faulted "encoder frames timed out" on a 202 ms wall stall
+  // of irslam-sim, 1 run in 5). The silence fault test silences it for 6 s.
   nlohmann::json TestConfig(const nlohmann::json& over) const {
-    nlohmann::json c = {{"controller", {{"timeout_s", std::max(0.1, 0.1 * kScale)}}},
+    nlohmann::json c = {{"controller", {{"timeout_s", std::max(0.3, 0.3 * kScale)}}},
                         {"state", {{"dir", StateDir()}}}};
     c.merge_patch(over);
     return c;
