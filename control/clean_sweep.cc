@@ -71,9 +71,7 @@ Twist Clean::Follow(const Pose2& me, const RangeScan& scan, bool* blocked, bool*
   const double rest = len - along;
   for (int i = 0; i < kNumIrSensors; ++i) {
     if (!scan.range_m[i]) continue;
-    const auto& m = mounts_[i];
-    const double hx = m.x + *scan.range_m[i] * std::cos(m.theta);
-    const double hy = m.y + *scan.range_m[i] * std::sin(m.theta);
+    const auto [hx, hy] = HitPoint(mounts_[i], *scan.range_m[i]);
     if (hx > kAheadM && std::abs(hy) < radius_m_ && hx < radius_m_ + o.front_stop_m &&
         hx < rest + radius_m_ + std::min(o.clearance_m, o.edge_clearance_m) - 0.05)
       *blocked = true;

@@ -77,6 +77,8 @@ options::Table<GoToOptions> GoToKeys() {
       {"escape_drive_s", &O::escape_drive_s, 0, 10, "s",
        "drive off for this long once turned away"},
       {"escape_speed_mps", &O::escape_speed_mps, 0, 1, "m/s", "speed driving off"},
+      {"blocked_escape_s", &O::blocked_escape_s, 0, 600, "s",
+       "blocked ahead this long with a path found: back off from what is ahead (0: never)"},
   };
   return kKeys;
 }
@@ -102,6 +104,7 @@ void GoTo::Begin(double t) {
   last_plan_ok_ = true;
   plan_failures_ = 0;
   retry_at_ = -1e9;
+  blocked_since_ = -1;
 }
 
 int64_t* GoTo::Budget(double t) {
@@ -140,9 +143,8 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
   const Pose2 me = slam.pose();
   for (int i = 0; i < kNumIrSensors; ++i) {
     if (!scan.range_m[i]) continue;
-    const auto& m = mounts_[i];
-    const Eigen::Vector2d r(m.x + *scan.range_m[i] * std::cos(m.theta),
-                            m.y + *scan.range_m[i] * std::sin(m.theta));
+    const BeamHit h = HitPoint(mounts_[i], *scan.range_m[i]);
+    const Eigen::Vector2d r(h.x, h.y);
     const Eigen::Vector2d w = Eigen::Vector2d(me.x, me.y) + RotateVector(r, me.theta);
     obstacles.push_back({w, w});
   }
@@ -227,25 +229,36 @@ Twist GoTo::Escape(double t, const Pose2& me) {
   return {o.escape_speed_mps, 0};
 }
 
-std::optional<double> GoTo::Front(const RangeScan& scan, const WallFollower& follower) const {
+std::optional<GoTo::Hit> GoTo::NearestAhead(const RangeScan& scan) const {
   // Anything any sensor sees close ahead (not only the front ones: a box corner
   // can sit between the beams of the front sensors), or what the bumper found
   // there before (a chair leg the beams miss).
-  std::optional<double> front = follower.FrontDistance(scan);
+  std::optional<Hit> nearest;
   for (int i = 0; i < kNumIrSensors; ++i) {
     if (!scan.range_m[i]) continue;
-    const auto& m = mounts_[i];
-    const double hx = m.x + *scan.range_m[i] * std::cos(m.theta);
-    const double hy = m.y + *scan.range_m[i] * std::sin(m.theta);
+    const auto [hx, hy] = HitPoint(mounts_[i], *scan.range_m[i]);
     // Ahead of the centre: the side sensors' beams (at +-90 degrees) have an x
     // of 1e-17 m from rounding and are not ahead (before 2026-12-03 they were:
     // a contact remembered beside the robot blocked it for good, docs/reliability.md).
     if (hx > kAheadM && std::hypot(hx, hy) < radius_m_ + options_.near_obstacle_m) {
       const double d = std::hypot(hx, hy) + options_.near_obstacle_offset_m;
-      if (!front || d < *front) front = d;
+      if (!nearest || d < nearest->distance) nearest = Hit{d, std::atan2(hy, hx)};
     }
   }
+  return nearest;
+}
+
+std::optional<double> GoTo::Front(const RangeScan& scan, const WallFollower& follower) const {
+  std::optional<double> front = follower.FrontDistance(scan);
+  if (const auto hit = NearestAhead(scan); hit && (!front || hit->distance < *front))
+    front = hit->distance;
   return front;
+}
+
+double GoTo::FrontBearing(const RangeScan& scan, const WallFollower& follower) const {
+  const auto hit = NearestAhead(scan);
+  const auto ahead = follower.FrontDistance(scan);
+  return hit && (!ahead || hit->distance < *ahead) ? hit->bearing : 0.0;
 }
 
 Twist GoTo::Pursue(const Pose2& me, std::optional<double> front) {
@@ -270,22 +283,35 @@ Twist GoTo::Pursue(const Pose2& me, std::optional<double> front) {
   return {v, std::clamp(o.k_heading * err, -o.pursuit_max_rate_rad_s, o.pursuit_max_rate_rad_s)};
 }
 
+bool GoTo::NoProgress(double t, const Pose2& p) {
+  // Stuck (turning on the spot, no way found through what the beams see): after
+  // go_to_stuck_s without getting go_to_progress_m further, give the goal up.
+  const auto& o = options_;
+  if (progress_t_ < since_ ||
+      std::hypot(p.x - progress_at_.x(), p.y - progress_at_.y()) > o.go_to_progress_m) {
+    progress_t_ = t;
+    progress_at_ = {p.x, p.y};
+    return false;
+  }
+  return t - progress_t_ > o.go_to_stuck_s && t >= backoff_until_;
+}
+
+bool GoTo::BlockedTooLong(double t, bool blocked) {
+  if (!blocked || !last_plan_ok_ || path_.empty()) {
+    blocked_since_ = -1;
+    return false;
+  }
+  if (blocked_since_ < 0) blocked_since_ = t;
+  if (options_.blocked_escape_s <= 0 || t - blocked_since_ <= options_.blocked_escape_s) return false;
+  blocked_since_ = -1;
+  return true;
+}
+
 GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_scan,
                         uint8_t bumpers, const BumpMemory& bumps, const WallFollower& follower) {
   const auto& o = options_;
   if (t - since_ > o.go_to_timeout_s) return GiveUp("not reached in time");
-  // Stuck (turning on the spot, no way found through what the beams see): after
-  // go_to_stuck_s without getting go_to_progress_m further, give the goal up.
-  {
-    const Pose2 p = slam.pose();
-    if (progress_t_ < since_ ||
-        std::hypot(p.x - progress_at_.x(), p.y - progress_at_.y()) > o.go_to_progress_m) {
-      progress_t_ = t;
-      progress_at_ = {p.x, p.y};
-    } else if (t - progress_t_ > o.go_to_stuck_s && t >= backoff_until_) {
-      return GiveUp("no way found");
-    }
-  }
+  if (NoProgress(t, slam.pose())) return GiveUp("no way found");
   if (bumpers != 0 && t >= backoff_until_) {
     // The same contact again (not got clear of it yet) is not a second one.
     const Pose2 p = slam.pose();
@@ -311,6 +337,15 @@ GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_s
   const RangeScan scan = bumps.Apply(raw_scan, me);
   const std::optional<double> front = Front(scan, follower);
   const bool blocked = front && *front < o.front_stop_m;
+  // Blocked with a path found: the path leads past what is ahead closer than
+  // front_stop_m lets the robot go (the plan keeps only the robot radius plus
+  // clearance_m from a reading), and turning towards it did not clear the way.
+  // Holding still would end in "no way found" (fig16 cleaning, CI 2026-12-03):
+  // back off from it as from a contact, not counted as one, and plan again.
+  if (BlockedTooLong(t, blocked)) {
+    BeginEscape(t, slam, FrontBearing(scan, follower));
+    return Drive(Escape(t, me));
+  }
   // Blocked: replan at once, but after a failed plan only when the back-off
   // allows (a failed search floods the whole grid; every period was too much).
   // A search longer than a period's budget goes on in the next periods: the

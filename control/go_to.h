@@ -80,6 +80,11 @@ struct GoToOptions {
   double escape_max_rate_rad_s = 0.9;
   double escape_drive_s = 1.0;  // drive off for this long once turned away
   double escape_speed_mps = 0.08;
+  // Blocked ahead this long with a path found (the path leads past what is in
+  // front closer than front_stop_m lets the robot go, so it would hold still
+  // until go_to_stuck_s gives the goal up): back off from it as from a contact,
+  // without counting one, and plan again from there. 0: never.
+  double blocked_escape_s = 3.0;
   PlannerOptions planner;  // grid; inflation and hard distance come from the above
 };
 options::Table<GoToOptions> GoToKeys();
@@ -149,6 +154,18 @@ class GoTo {
   void BeginEscape(double t, const slam::Slam& slam, double contact_bearing);
   Twist Escape(double t, const Pose2& me);
   Twist Pursue(const Pose2& me, std::optional<double> front);
+  // Stuck: go_to_stuck_s without getting go_to_progress_m further (and not escaping).
+  bool NoProgress(double t, const Pose2& p);
+  // Blocked ahead with a path for longer than blocked_escape_s (then starts over).
+  bool BlockedTooLong(double t, bool blocked);
+  struct Hit {
+    double distance;  // as Front counts it
+    double bearing;   // robot frame
+  };
+  std::optional<Hit> NearestAhead(const RangeScan& scan) const;
+  // Bearing (robot frame) of what Front found closest; 0 when that was the
+  // front sensors' distance.
+  double FrontBearing(const RangeScan& scan, const WallFollower& follower) const;
 
   GoToOptions options_;
   double radius_m_;
@@ -179,6 +196,7 @@ class GoTo {
   int bumps_ = 0;  // contacts since the go-to began
   int same_contact_escapes_ = 0;
   Eigen::Vector2d last_contact_ = Eigen::Vector2d::Zero();
+  double blocked_since_ = -1;  // blocked ahead with a path since then (-1: not)
   double progress_t_ = -1;  // got go_to_progress_m further at this time ...
   Eigen::Vector2d progress_at_ = Eigen::Vector2d::Zero();  // ... from here
 };

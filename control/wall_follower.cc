@@ -13,14 +13,6 @@ constexpr int kFrontRight = 2;  // -20 deg
 constexpr int kFront = 3;       //   0 deg
 constexpr int kFrontLeft = 4;   // +20 deg
 
-struct Point {
-  double x, y;
-};
-
-Point Hit(const SensorMount& m, double r) {
-  return {m.x + r * std::cos(m.theta), m.y + r * std::sin(m.theta)};
-}
-
 }  // namespace
 
 options::Table<WallFollowerOptions> WallFollowerKeys() {
@@ -105,8 +97,8 @@ std::optional<WallEstimate> WallFollower::RightWall(const RangeScan& scan) const
   const auto& r1 = scan.range_m[kRightFront];
   const double lost = options_.follow_distance_m + options_.lost_wall_margin_m;
   if (r0 && r1) {
-    const Point a = Hit(mounts_[kRight], *r0);
-    const Point b = Hit(mounts_[kRightFront], *r1);
+    const BeamHit a = HitPoint(mounts_[kRight], *r0);
+    const BeamHit b = HitPoint(mounts_[kRightFront], *r1);
     const double dx = b.x - a.x, dy = b.y - a.y;
     const double len = std::hypot(dx, dy);
     if (len > 1e-3) {
@@ -117,12 +109,12 @@ std::optional<WallEstimate> WallFollower::RightWall(const RangeScan& scan) const
     }
   }
   if (r0) {
-    const Point a = Hit(mounts_[kRight], *r0);
+    const BeamHit a = HitPoint(mounts_[kRight], *r0);
     if (-a.y < lost) return WallEstimate{-a.y, 0.0, !r1};
   }
   if (r1) {
     // Only the diagonal sensor: assume the wall is parallel.
-    const Point b = Hit(mounts_[kRightFront], *r1);
+    const BeamHit b = HitPoint(mounts_[kRightFront], *r1);
     if (-b.y < lost) return WallEstimate{-b.y, 0.0};
   }
   return std::nullopt;
@@ -132,7 +124,7 @@ std::optional<double> WallFollower::FrontDistance(const RangeScan& scan) const {
   std::optional<double> best;
   for (int i : {kFrontRight, kFront, kFrontLeft}) {
     if (!scan.range_m[i]) continue;
-    const Point p = Hit(mounts_[i], *scan.range_m[i]);
+    const BeamHit p = HitPoint(mounts_[i], *scan.range_m[i]);
     // Only obstacles in the robot's swept corridor count as "ahead".
     if (std::abs(p.y) > robot_radius_m_ + 0.05 || p.x <= 0) continue;
     if (!best || p.x < *best) best = p.x;

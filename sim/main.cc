@@ -511,6 +511,19 @@ int Generate(uint64_t seed, const std::string& profile_name, const std::string& 
   return 0;
 }
 
+// The options 'run' and 'serve' share.
+void AddCommon(CLI::App* sub, Common* common) {
+  sub->add_option("--world", common->world_path, "World file (JSON, contracts §1)")->required();
+  sub->add_option("--seed", common->seed, "Random seed (default: the world's, else 1)");
+  sub->add_option("--truth-out", common->truth_out, "Write the truth file here (contracts §5)");
+  sub->add_option("--faults", common->faults,
+                  "Inject faults between the controller and the bus: NAME[:KEY=VALUE...],... "
+                  "(loss, burst, corrupt, duplicate, reorder, delay, silence, flood, stuck_ir, "
+                  "encoder_glitch, kidnap; docs/reliability.md)");
+  sub->add_option("--config", common->config_path,
+                  "irslamd config file (robot geometry, sensors; and the core in 'run')");
+}
+
 }  // namespace
 }  // namespace irslam::sim
 
@@ -518,19 +531,8 @@ int main(int argc, char** argv) {
   CLI::App app{"irslam-sim: simulated motor controller, IR sensors and world for irslamd"};
   app.require_subcommand(1);
   irslam::sim::Common common;
-  const auto add_common = [&](CLI::App* sub) {
-    sub->add_option("--world", common.world_path, "World file (JSON, contracts §1)")->required();
-    sub->add_option("--seed", common.seed, "Random seed (default: the world's, else 1)");
-    sub->add_option("--truth-out", common.truth_out, "Write the truth file here (contracts §5)");
-    sub->add_option("--faults", common.faults,
-                    "Inject faults between the controller and the bus: NAME[:KEY=VALUE...],... "
-                    "(loss, burst, corrupt, duplicate, reorder, delay, silence, flood, stuck_ir, "
-                    "encoder_glitch, kidnap; docs/reliability.md)");
-    sub->add_option("--config", common.config_path,
-                    "irslamd config file (robot geometry, sensors; and the core in 'run')");
-  };
   auto* run = app.add_subcommand("run", "Run the whole mission in process, as fast as possible");
-  add_common(run);
+  irslam::sim::AddCommon(run, &common);
   double max_time = 0;
   std::string map_out;
   run->add_option("--max-time", max_time,
@@ -569,7 +571,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"bounce"}));
 
   auto* serve = app.add_subcommand("serve", "Be the motor controller on a CAN bus");
-  add_common(serve);
+  irslam::sim::AddCommon(serve, &common);
   std::string iface;
   double time_scale = 1.0;
   serve->add_option("--can", iface, "vcan0, can0 or unix:PATH")->required();

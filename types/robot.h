@@ -51,6 +51,14 @@ struct SensorMount {
   double theta = 0;
 };
 
+// Where a beam of range r from mount m ends, in the robot frame.
+struct BeamHit {
+  double x, y;
+};
+inline BeamHit HitPoint(const SensorMount& m, double r) {
+  return {m.x + r * std::cos(m.theta), m.y + r * std::sin(m.theta)};
+}
+
 }  // namespace irslam
 
 #endif  // IRSLAM_TYPES_ROBOT_H_

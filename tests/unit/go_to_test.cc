@@ -57,6 +57,37 @@ TEST(GoToTest, ACloseReadingBesideTheRobotDoesNotBlockItAheadDoes) {
   }
 }
 
+// Blocked ahead with a path found (the path passes what is ahead closer than
+// front_stop_m lets the robot drive): until 2026-12-03 the robot held still,
+// turned towards the path, until the no-progress limit gave the goal up ("no
+// way found", fig16 cleaning in CI). Now after blocked_escape_s it backs off
+// from what is ahead as from a contact: turns away at the escape turn-rate limit.
+TEST(GoToTest, BlockedAheadWithAPathBacksOffAfterTheBlockedTime) {
+  for (const double escape_s : {3.0, 0.0}) {
+    Rig r;
+    GoToOptions o;
+    o.blocked_escape_s = escape_s;
+    GoTo g(o, r.o.slam.geometry, r.o.slam.mounts);
+    ASSERT_TRUE(g.TryGoal(0, {2, 0}, 0, true, r.slam, r.bumps));
+    g.Begin(0);
+    RangeScan scan;
+    scan.range_m[1] = 0.08;  // front right, 8 cm: blocked
+    double escaped = -1;
+    for (double t = 0; t < 10 && escaped < 0; t += 0.5) {
+      const GoTo::Result res = g.Step(t, r.slam, scan, 0, r.bumps, r.follower);
+      ASSERT_EQ(res.status, GoTo::Status::kDriving) << t;
+      EXPECT_EQ(res.twist.v, 0) << t;
+      // Turning away from the front right (to the left) at the escape limit.
+      if (res.twist.omega == o.escape_max_rate_rad_s) escaped = t;
+    }
+    if (escape_s > 0) {
+      EXPECT_DOUBLE_EQ(escaped, 3.5);  // the first step after blocked_escape_s
+    } else {
+      EXPECT_EQ(escaped, -1) << "blocked_escape_s 0: holds still";
+    }
+  }
+}
+
 TEST(GoToTest, GivesUpAfterTheStuckTime) {
   for (double stuck : {25.0, 10.0}) {
     Rig r;
