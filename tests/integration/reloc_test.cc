@@ -183,6 +183,19 @@ TEST(RelocTest, CleaningAfterARightCommitDoesNotRelocaliseAgain) {
   }
 }
 
+// The map saved by a cleaning (seed 1) stopped once `cells` cells were done.
+robot::MapSnapshot MapOfCleaningStoppedAfter(const sim::World& world, const robot::CoreOptions& options,
+                                             int cells) {
+  sim::RunSetup first;
+  first.stop_when = [cells](const sim::InProcessRun& run) {
+    const auto c = run.core->Status(run.t).cleaning;
+    return c && c->cells_done >= cells;
+  };
+  sim::InProcessRun a = sim::RunInProcess(world, options, 1, 2000, nullptr, nullptr, nullptr, first);
+  a.core->Stop(a.t);
+  return a.core->Map();
+}
+
 // Issue 13's resume, through issue 14: a cleaning stopped after two cells (the
 // map saved then), a later mission from elsewhere relocalises in that map and
 // cleans only the cells left.
@@ -190,14 +203,7 @@ TEST(RelocTest, CleaningStoppedAfterTwoCellsResumesTheRestInTheSavedMap) {
   const sim::World world = testing::LoadTestWorld("fig14");
   robot::CoreOptions options = robot::DefaultCoreOptions();
   options.mission.mode = "clean";
-  sim::RunSetup first;
-  first.stop_when = [](const sim::InProcessRun& run) {
-    const auto c = run.core->Status(run.t).cleaning;
-    return c && c->cells_done >= 2;
-  };
-  sim::InProcessRun a = sim::RunInProcess(world, options, 1, 2000, nullptr, nullptr, nullptr, first);
-  a.core->Stop(a.t);
-  const robot::MapSnapshot saved = a.core->Map();
+  const robot::MapSnapshot saved = MapOfCleaningStoppedAfter(world, options, 2);
   ASSERT_TRUE(saved.cleaning);
   ASSERT_EQ(saved.cleaning->cells_done, 2);
   const int total = saved.cleaning->cells_total;
@@ -234,14 +240,7 @@ TEST(RelocTest, ADoneCellWithoutOutlineOrRouteIsSkippedOnResume) {
   const sim::World world = testing::LoadTestWorld("fig14");
   robot::CoreOptions options = robot::DefaultCoreOptions();
   options.mission.mode = "clean";
-  sim::RunSetup first;
-  first.stop_when = [](const sim::InProcessRun& run) {
-    const auto c = run.core->Status(run.t).cleaning;
-    return c && c->cells_done >= 1;
-  };
-  sim::InProcessRun a = sim::RunInProcess(world, options, 1, 2000, nullptr, nullptr, nullptr, first);
-  a.core->Stop(a.t);
-  robot::MapSnapshot saved = a.core->Map();
+  robot::MapSnapshot saved = MapOfCleaningStoppedAfter(world, options, 1);
   ASSERT_TRUE(saved.cleaning);
   control::CleaningProgress::Cell empty;
   empty.id = 99;
