@@ -123,17 +123,44 @@ void Replay::OnHeartbeat(const can_frame& f, double t) {
 }
 
 std::optional<double> EstimateTimeScale(const std::vector<int64_t>& stamps_ns, double period_s) {
-  // The spacing over windows of 10 periods (wake-up jitter averages out), then the
-  // median window (a skipped period or a pause does not move it).
+  // The control period is timed on an absolute clock: each command is a whole number
+  // of periods after the one before, plus the difference of two wake-up latencies. A
+  // loaded machine skips periods (the daemon runs one tick per wake-up), so a median
+  // spacing, even over windows, can be a period and a bit.
+  //  1. p1: the mean of the spacings under 1.5 median spacings (most are one period;
+  //     a run of them sums to its periods plus the latencies of its two ends).
+  //  2. Over windows of 10 spacings (the latencies of the two ends only), the whole
+  //     number of periods n = round(window / p1), counting the skipped ones; the
+  //     period is the median of window / n.
   constexpr size_t kWindow = 10;
   if (stamps_ns.size() < kWindow + 1) return std::nullopt;
-  std::vector<int64_t> d;
-  for (size_t i = kWindow; i < stamps_ns.size(); ++i) {
-    if (stamps_ns[i] > stamps_ns[i - kWindow]) d.push_back(stamps_ns[i] - stamps_ns[i - kWindow]);
+  std::vector<double> d;
+  for (size_t i = 1; i < stamps_ns.size(); ++i) {
+    if (stamps_ns[i] > stamps_ns[i - 1]) d.push_back(static_cast<double>(stamps_ns[i] - stamps_ns[i - 1]) * 1e-9);
   }
-  if (d.empty()) return std::nullopt;
-  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
-  const double k = period_s * kWindow / (static_cast<double>(d[d.size() / 2]) * 1e-9);
+  if (d.size() < kWindow) return std::nullopt;
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  const double p_med = median(d);
+  double sum = 0;
+  int count = 0;
+  for (double x : d) {
+    if (x < 1.5 * p_med) {
+      sum += x;
+      ++count;
+    }
+  }
+  const double p1 = sum / count;  // p_med itself is counted
+  std::vector<double> per;
+  for (size_t i = kWindow; i < stamps_ns.size(); ++i) {
+    const double w = static_cast<double>(stamps_ns[i] - stamps_ns[i - kWindow]) * 1e-9;
+    const double n = std::round(w / p1);
+    if (n >= 1) per.push_back(w / n);
+  }
+  if (per.empty()) return std::nullopt;
+  const double k = period_s / median(per);
   // One significant digit (1, 2, 5, 10, ...) when within 3 %, else two.
   const double mag1 = std::pow(10.0, std::floor(std::log10(k)));
   const double one = std::round(k / mag1) * mag1;
