@@ -79,6 +79,8 @@ options::Table<GoToOptions> GoToKeys() {
       {"escape_speed_mps", &O::escape_speed_mps, 0, 1, "m/s", "speed driving off"},
       {"blocked_escape_s", &O::blocked_escape_s, 0, 600, "s",
        "blocked ahead this long with a path found: back off from what is ahead (0: never)"},
+      {"boxed_in_contacts_m", &O::boxed_in_contacts_m, 0, 2, "m",
+       "no way found with remembered contacts this close: plan again without them (0: never)"},
   };
   return kKeys;
 }
@@ -88,7 +90,18 @@ bool GoTo::TryGoal(double t, const Eigen::Vector2d& goal, double heading, bool a
   p1_ = goal;
   p1_heading_ = heading;
   align_ = align;
-  const PathPlanner::Progress p = Replan(t, slam, RangeScan{}, bumps);
+  drop_contacts_ = false;
+  PathPlanner::Progress p = Replan(t, slam, RangeScan{}, bumps);
+  const Pose2 me = slam.pose();
+  const Eigen::Vector2d at(me.x, me.y);
+  bool near = false;
+  for (size_t i = 0; i < bumps.points().size() && !near; ++i)
+    near = (bumps.points()[i] - at).norm() < options_.boxed_in_contacts_m;
+  if (p == PathPlanner::Progress::kFailed && near) {
+    drop_contacts_ = true;
+    drop_at_ = at;
+    p = Replan(t, slam, RangeScan{}, bumps);
+  }
   // Still searching: no path yet (not the last goal's either): Step waits for it.
   if (p == PathPlanner::Progress::kRunning) path_.clear();
   return p != PathPlanner::Progress::kFailed;
@@ -137,7 +150,11 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
     const Eigen::Vector2d d = (l.p1 - l.p0).normalized();
     obstacles.push_back({l.p0 - o.line_extension_m * d, l.p1 + o.line_extension_m * d});
   }
-  for (const auto& b : bumps.points()) obstacles.push_back({b, b});
+  for (size_t i = 0; i < bumps.points().size(); ++i) {
+    const Eigen::Vector2d& b = bumps.points()[i];
+    if (!drop_contacts_ || (b - drop_at_).norm() >= o.boxed_in_contacts_m)
+      obstacles.push_back({b, b});
+  }
   const size_t n_static = obstacles.size();
   // What the IR sensors see now, mapped or not.
   const Pose2 me = slam.pose();

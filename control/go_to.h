@@ -85,6 +85,15 @@ struct GoToOptions {
   // until go_to_stuck_s gives the goal up): back off from it as from a contact,
   // without counting one, and plan again from there. 0: never.
   double blocked_escape_s = 3.0;
+  // No way found from where the robot stands while remembered contacts lie this
+  // close: plan once more without them (and leave them out of this goal's
+  // replans). Turning on the spot against something records a contact at every
+  // heading, a ring around the robot; a pose corrected after a contact can put
+  // the robot over it. Either boxes the start in the planner's grid, and a
+  // cleaning gave up every cell at once. The front stop and the bumpers still
+  // guard the way. 0: never (the default: over the campaigns, 0.3 m cleaned
+  // more but touched more; docs/cleaning.md).
+  double boxed_in_contacts_m = 0;
   PlannerOptions planner;  // grid; inflation and hard distance come from the above
 };
 options::Table<GoToOptions> GoToKeys();
@@ -197,6 +206,10 @@ class GoTo {
   int same_contact_escapes_ = 0;
   Eigen::Vector2d last_contact_ = Eigen::Vector2d::Zero();
   double blocked_since_ = -1;  // blocked ahead with a path since then (-1: not)
+  // This goal's plans leave out the contacts within boxed_in_contacts_m of
+  // drop_at_ (set by TryGoal when boxed in there).
+  bool drop_contacts_ = false;
+  Eigen::Vector2d drop_at_ = Eigen::Vector2d::Zero();
   double progress_t_ = -1;  // got go_to_progress_m further at this time ...
   Eigen::Vector2d progress_at_ = Eigen::Vector2d::Zero();  // ... from here
 };

@@ -88,6 +88,50 @@ TEST(GoToTest, BlockedAheadWithAPathBacksOffAfterTheBlockedTime) {
   }
 }
 
+// Turning on the spot with a bumper held records the contact at every heading:
+// a ring of points 19 cm round the robot, which boxes its start in the planner's
+// grid. Until 2026-12-03 every plan from there failed, and a cleaning gave up
+// all its cells within a second (11 of 200 nominal campaign runs, e.g. seed
+// 1150). Now a failed plan with contacts within boxed_in_contacts_m plans once
+// more without them; farther contacts stay obstacles.
+TEST(GoToTest, BoxedInByItsOwnContactsPlansAgainWithoutTheNearOnes) {
+  for (const double boxed_in_m : {0.3, 0.0}) {
+    Rig r;
+    for (int deg = 0; deg < 360; deg += 10) r.bumps.Record({0, 0, deg * M_PI / 180}, 1);
+    ASSERT_GT(r.bumps.points().size(), 30u);
+    GoToOptions o;
+    o.boxed_in_contacts_m = boxed_in_m;
+    GoTo g(o, r.o.slam.geometry, r.o.slam.mounts);
+    const bool planned = g.TryGoal(0, {2, 0}, 0, false, r.slam, r.bumps);
+    if (boxed_in_m == 0) {
+      EXPECT_FALSE(planned) << "the ring boxes the start in";
+      continue;
+    }
+    ASSERT_TRUE(planned);
+    EXPECT_NEAR((g.path().back() - Eigen::Vector2d(2, 0)).norm(), 0, 1e-9);
+    g.Begin(0);
+    // Its replans leave the ring out too: it drives.
+    for (double t = 0; t <= 2; t += 0.5) {
+      const GoTo::Result res = g.Step(t, r.slam, RangeScan{}, 0, r.bumps, r.follower);
+      ASSERT_EQ(res.status, GoTo::Status::kDriving) << t;
+    }
+  }
+  // Contacts beyond boxed_in_contacts_m are still in the way: the ring inside a
+  // square of them 2 m wide, the goal outside: no way.
+  Rig r;
+  for (int deg = 0; deg < 360; deg += 10) r.bumps.Record({0, 0, deg * M_PI / 180}, 1);
+  for (double u = -1; u <= 1; u += 0.04) {
+    for (const Eigen::Vector2d& c : {Eigen::Vector2d(u, -1), Eigen::Vector2d(u, 1), Eigen::Vector2d(-1, u),
+                                    Eigen::Vector2d(1, u)}) {
+      r.bumps.Record({c.x() - 0.19, c.y(), 0}, 0);  // released: each a new contact
+      r.bumps.Record({c.x() - 0.19, c.y(), 0}, 3);  // at c
+    }
+  }
+  ASSERT_GT(r.bumps.points().size(), 190u);
+  GoTo g({}, r.o.slam.geometry, r.o.slam.mounts);
+  EXPECT_FALSE(g.TryGoal(0, {2, 0}, 0, false, r.slam, r.bumps));
+}
+
 TEST(GoToTest, GivesUpAfterTheStuckTime) {
   for (double stuck : {25.0, 10.0}) {
     Rig r;
