@@ -152,10 +152,18 @@ TEST_F(RecordReplayTest, AMissionRecordedOnTheBusReplaysOfflineToTheLiveMap) {
   std::printf("replay of irslamd's recording: %.1f s of robot time at %.0fx real time (%.0fx on CPU time)\n",
               stats["robot_time_s"].get<double>(), stats["speed"].get<double>(), stats["speed_cpu"].get<double>());
 
-  // 2. irslam-candump's log: the bus as a bystander saw it (no header: the time
-  //    scale is estimated from the WHEEL_CMD spacing, the origin is the first frame).
-  ASSERT_EQ(Replay({dir_ + "/candump.log", "--config", config, "--map-out", dir_ + "/replay2.json", "--stats",
-                    dir_ + "/stats2.json"},
+  // 2. irslam-candump's log: the bus as a bystander saw it (no header, the origin
+  //    is the first frame). Without --time-scale the scale is estimated from the
+  //    WHEEL_CMD spacing, which a loaded machine distorts: CI read 9 for 10 (the
+  //    daemon skipped 1 period in 6), 5.7 for 5 (sanitizer build), and 13 for 10
+  //    here beside a CI run (4 periods in 10 skipped). So the estimate is only
+  //    printed here (its arithmetic is ReplayTest's); the replay compared with the
+  //    live map is given the scale, as docs/replay.md tells users of such logs.
+  ASSERT_EQ(Replay({dir_ + "/candump.log", "--config", config, "--stats", dir_ + "/stats_est.json"}, &out), 0)
+      << out;
+  std::printf("%s", out.c_str());
+  ASSERT_EQ(Replay({dir_ + "/candump.log", "--config", config, "--time-scale", std::to_string(kScale), "--map-out",
+                    dir_ + "/replay2.json", "--stats", dir_ + "/stats2.json"},
                    &out),
             0)
       << out;
