@@ -92,15 +92,15 @@ bool GoTo::TryGoal(double t, const Eigen::Vector2d& goal, double heading, bool a
   align_ = align;
   drop_contacts_ = false;
   PathPlanner::Progress p = Replan(t, slam, RangeScan{}, bumps);
-  const Pose2 me = slam.pose();
-  const Eigen::Vector2d at(me.x, me.y);
-  bool near = false;
-  for (size_t i = 0; i < bumps.points().size() && !near; ++i)
-    near = (bumps.points()[i] - at).norm() < options_.boxed_in_contacts_m;
-  if (p == PathPlanner::Progress::kFailed && near) {
-    drop_contacts_ = true;
-    drop_at_ = at;
-    p = Replan(t, slam, RangeScan{}, bumps);
+  if (p == PathPlanner::Progress::kFailed) {
+    // Boxed in by contacts close by: once more without them.
+    const Eigen::Vector2d at(slam.pose().x, slam.pose().y);
+    const auto& pts = bumps.points();
+    if (std::any_of(pts.begin(), pts.end(), [&](const Eigen::Vector2d& b) { return WithinDropped(b, at); })) {
+      drop_contacts_ = true;
+      drop_at_ = at;
+      p = Replan(t, slam, RangeScan{}, bumps);
+    }
   }
   // Still searching: no path yet (not the last goal's either): Step waits for it.
   if (p == PathPlanner::Progress::kRunning) path_.clear();
@@ -150,10 +150,8 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
     const Eigen::Vector2d d = (l.p1 - l.p0).normalized();
     obstacles.push_back({l.p0 - o.line_extension_m * d, l.p1 + o.line_extension_m * d});
   }
-  for (size_t i = 0; i < bumps.points().size(); ++i) {
-    const Eigen::Vector2d& b = bumps.points()[i];
-    if (!drop_contacts_ || (b - drop_at_).norm() >= o.boxed_in_contacts_m)
-      obstacles.push_back({b, b});
+  for (const auto& b : bumps.points()) {
+    if (!drop_contacts_ || !WithinDropped(b, drop_at_)) obstacles.push_back({b, b});
   }
   const size_t n_static = obstacles.size();
   // What the IR sensors see now, mapped or not.
@@ -174,6 +172,10 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
   if (clock_) planning_ns_ += clock_() - t0;
   if (o.plan_cells_per_pop > 0) *Budget(t) -= planner_.start_cells() / o.plan_cells_per_pop;
   return p == PathPlanner::Progress::kRunning ? ContinuePlan(t) : Ended(p);
+}
+
+bool GoTo::WithinDropped(const Eigen::Vector2d& contact, const Eigen::Vector2d& at) const {
+  return (contact - at).norm() < options_.boxed_in_contacts_m;
 }
 
 PathPlanner::Progress GoTo::Ended(PathPlanner::Progress p) {

@@ -175,6 +175,8 @@ class GoTo {
   // Bearing (robot frame) of what Front found closest; 0 when that was the
   // front sensors' distance.
   double FrontBearing(const RangeScan& scan, const WallFollower& follower) const;
+  // A remembered contact within boxed_in_contacts_m of at (never when it is 0).
+  bool WithinDropped(const Eigen::Vector2d& contact, const Eigen::Vector2d& at) const;
 
   GoToOptions options_;
   double radius_m_;

@@ -91,7 +91,8 @@ class Replay {
 // The time scale of a log without irslamd's header, from its WHEEL_CMD stamps (one
 // per control period of period_s robot seconds, on an absolute clock; a loaded
 // machine skips periods): the period is the median over windows of 10 spacings of
-// window / the whole number of periods in it (counted with the median spacing), and
+// window / the whole number of periods in it (counted with the mean of the spacings
+// under 1.5 median spacings), and
 // the scale is period_s over it, rounded to one significant digit when that is within
 // 3 %, else to two. nullopt with fewer than 11 commands.
 std::optional<double> EstimateTimeScale(const std::vector<int64_t>& wheel_cmd_stamps_ns, double period_s);
