@@ -122,6 +122,63 @@ void Replay::OnHeartbeat(const can_frame& f, double t) {
   if (recorded != core_.state()) ++stats_.states_differed;
 }
 
+void ControllerClockFit::Add(int64_t log_ns, uint16_t stamp_ms) {
+  constexpr uint16_t kMaxStepMs = 1000;
+  const auto step = static_cast<uint16_t>(stamp_ms - last_ms_);  // modulo 2^16
+  if (n_ > 0 && step > kMaxStepMs) CloseSegment();
+  if (n_ == 0) {
+    first_ns_ = log_ns;
+    robot_s_ = 0;
+  } else {
+    robot_s_ += 1e-3 * step;
+  }
+  last_ms_ = stamp_ms;
+  const double x = robot_s_, y = 1e-9 * static_cast<double>(log_ns - first_ns_);
+  sx_ += x;
+  sy_ += y;
+  sxx_ += x * x;
+  sxy_ += x * y;
+  ++n_;
+  ++frames_;
+}
+
+void ControllerClockFit::CloseSegment() {
+  if (n_ >= 2) {
+    const double n = static_cast<double>(n_);
+    cxx_ += sxx_ - sx_ * sx_ / n;
+    cxy_ += sxy_ - sx_ * sy_ / n;
+    span_s_ += robot_s_;
+  }
+  sx_ = sy_ = sxx_ = sxy_ = 0;
+  n_ = 0;
+}
+
+std::optional<double> ControllerClockFit::Scale() const {
+  const auto k = Measured();
+  return k ? std::optional<double>(RoundTimeScale(*k)) : std::nullopt;
+}
+
+std::optional<double> ControllerClockFit::Measured() const {
+  double cxx = cxx_, cxy = cxy_, span = span_s_;
+  if (n_ >= 2) {
+    const double n = static_cast<double>(n_);
+    cxx += sxx_ - sx_ * sx_ / n;
+    cxy += sxy_ - sx_ * sy_ / n;
+    span += robot_s_;
+  }
+  // cxy / cxx: log seconds per robot second.
+  if (frames_ < 100 || span < 1.0 || cxx <= 0 || cxy <= 0) return std::nullopt;
+  return cxx / cxy;
+}
+
+double RoundTimeScale(double k) {
+  const double mag1 = std::pow(10.0, std::floor(std::log10(k)));
+  const double one = std::round(k / mag1) * mag1;
+  if (std::abs(one - k) <= 0.03 * k) return one;
+  const double mag2 = mag1 / 10;
+  return std::round(k / mag2) * mag2;
+}
+
 std::optional<double> EstimateTimeScale(const std::vector<int64_t>& stamps_ns, double period_s) {
   // The control period is timed on an absolute clock: each command is a whole number
   // of periods after the one before, plus the difference of two wake-up latencies. A
@@ -160,13 +217,7 @@ std::optional<double> EstimateTimeScale(const std::vector<int64_t>& stamps_ns, d
     if (n >= 1) per.push_back(w / n);
   }
   if (per.empty()) return std::nullopt;
-  const double k = period_s / median(per);
-  // One significant digit (1, 2, 5, 10, ...) when within 3 %, else two.
-  const double mag1 = std::pow(10.0, std::floor(std::log10(k)));
-  const double one = std::round(k / mag1) * mag1;
-  if (std::abs(one - k) <= 0.03 * k) return one;
-  const double mag2 = mag1 / 10;
-  return std::round(k / mag2) * mag2;
+  return RoundTimeScale(period_s / median(per));
 }
 
 }  // namespace irslam

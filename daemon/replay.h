@@ -88,13 +88,50 @@ class Replay {
   bool stop_frame_next_ = false;  // a noted stop: its stop frame follows
 };
 
+// The time scale of a log without irslamd's header, from the controller's own clock:
+// each ENCODER frame carries the controller's millisecond stamp (robot time, 16 bits,
+// wrapping every 65.536 s), the log the time it was received. Robot time against log
+// time is a line of slope 1 / scale plus a receive latency that a loaded machine makes
+// bursty but which does not grow with the log; a least-squares line over many frames
+// has it to within latency / span. The stamps are unwrapped frame to frame; a step back
+// or a jump of more than 1 s (a controller reset, a reordered or lost stretch) begins a
+// new segment, and the segments share one slope (pooled within-segment least squares),
+// so a reset costs nothing but its frame. Add() the frames in log order; Scale() is
+// nullopt until at least 100 frames span 1 s of robot time, else rounded as
+// EstimateTimeScale's.
+class ControllerClockFit {
+ public:
+  void Add(int64_t log_ns, uint16_t stamp_ms);
+  std::optional<double> Scale() const;
+  // The fitted scale before rounding (nullopt as Scale()).
+  std::optional<double> Measured() const;
+  size_t frames() const { return frames_; }
+
+ private:
+  void CloseSegment();
+  // The open segment: sums of x = robot s, y = log s, both from its first frame.
+  double sx_ = 0, sy_ = 0, sxx_ = 0, sxy_ = 0;
+  size_t n_ = 0;
+  int64_t first_ns_ = 0;
+  double robot_s_ = 0;  // unwrapped, from the segment's first frame
+  uint16_t last_ms_ = 0;
+  // Closed segments: their centred sums.
+  double cxx_ = 0, cxy_ = 0, span_s_ = 0;
+  size_t frames_ = 0;
+};
+
+// The scale k rounded to one significant digit (1, 2, 5, 10, ...) when that is within
+// 3 % of it, else to two.
+double RoundTimeScale(double k);
+
 // The time scale of a log without irslamd's header, from its WHEEL_CMD stamps (one
 // per control period of period_s robot seconds, on an absolute clock; a loaded
 // machine skips periods): the period is the median over windows of 10 spacings of
 // window / the whole number of periods in it (counted with the mean of the spacings
 // under 1.5 median spacings), and
 // the scale is period_s over it, rounded to one significant digit when that is within
-// 3 %, else to two. nullopt with fewer than 11 commands.
+// 3 %, else to two. nullopt with fewer than 11 commands. A loaded machine's bursts
+// of receive stamps distort it (docs/replay.md): ControllerClockFit first.
 std::optional<double> EstimateTimeScale(const std::vector<int64_t>& wheel_cmd_stamps_ns, double period_s);
 
 }  // namespace irslam

@@ -153,24 +153,21 @@ TEST_F(RecordReplayTest, AMissionRecordedOnTheBusReplaysOfflineToTheLiveMap) {
               stats["robot_time_s"].get<double>(), stats["speed"].get<double>(), stats["speed_cpu"].get<double>());
 
   // 2. irslam-candump's log: the bus as a bystander saw it (no header, the origin
-  //    is the first frame). Without --time-scale the scale is estimated from the
-  //    WHEEL_CMD spacing, which a loaded machine distorts: CI read 9 for 10 (the
-  //    daemon skipped 1 period in 6), 5.7 for 5 (sanitizer build), and 13 for 10
-  //    here beside a CI run (4 periods in 10 skipped). So the estimate is only
-  //    printed here (its arithmetic is ReplayTest's); the replay compared with the
-  //    live map is given the scale, as docs/replay.md tells users of such logs.
-  ASSERT_EQ(Replay({dir_ + "/candump.log", "--config", config, "--stats", dir_ + "/stats_est.json"}, &out), 0)
-      << out;
-  std::printf("%s", out.c_str());
-  ASSERT_EQ(Replay({dir_ + "/candump.log", "--config", config, "--time-scale", std::to_string(kScale), "--map-out",
-                    dir_ + "/replay2.json", "--stats", dir_ + "/stats2.json"},
+  //    is the first frame). The scale is told from the controller's ENCODER stamps
+  //    against the log's. (The WHEEL_CMD spacing, used before, a loaded machine
+  //    distorts: CI read 9 for 10, 5.7 for 5 in the sanitizer build, 13 for 10 beside
+  //    a CI run.)
+  ASSERT_EQ(Replay({dir_ + "/candump.log", "--config", config, "--map-out", dir_ + "/replay2.json", "--stats",
+                    dir_ + "/stats2.json"},
                    &out),
             0)
       << out;
   std::printf("%s", out.c_str());
+  EXPECT_NE(out.find("from the controller's ENCODER stamps"), std::string::npos) << out;
   const nlohmann::json dump = ReadJson(dir_ + "/replay2.json");
   const nlohmann::json stats2 = ReadJson(dir_ + "/stats2.json");
   EXPECT_EQ(stats2["time_scale"], kScale);
+  EXPECT_NEAR(stats2["time_scale_measured"].get<double>(), kScale, 0.02 * kScale);
   EXPECT_EQ(dump["state"], "done");
   // It may lack the frames the daemon heard before the bystander started (it starts
   // later than the daemon here), and sees the ticks from outside: the floating-point

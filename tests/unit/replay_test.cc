@@ -2,10 +2,12 @@
 // recorder (daemon/bus_recorder.h).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <utility>
 
 #include "daemon/bus_recorder.h"
 #include "daemon/candump_log.h"
@@ -140,6 +142,49 @@ TEST(ReplayTest, EstimatesTheTimeScaleOfALoadedMachineThatSkipsPeriods) {
     stamps.push_back(period * 2000000 + (i * 104729 % 5) * 100000);
   }
   EXPECT_EQ(EstimateTimeScale(stamps, 0.02), 10.0);
+}
+
+TEST(ReplayTest, TellsTheTimeScaleFromTheControllersEncoderStamps) {
+  // 10x on a loaded machine: a 100 Hz controller (10 ms robot, 1 ms wall) whose frames
+  // arrive in bursts: every 37th wake-up the bystander is starved for 0-60 ms and then
+  // receives what queued, all stamped at once. 60 s of robot time.
+  ControllerClockFit fit;
+  int64_t starved_until_ns = 0;
+  for (int i = 0; i < 6000; ++i) {
+    const int64_t sent_ns = 5'000'000'000 + int64_t{i} * 1'000'000;
+    if (i % 37 == 0) starved_until_ns = sent_ns + (i * 7919 % 61) * 1'000'000;
+    const int64_t received_ns = std::max(sent_ns + 50'000, starved_until_ns);
+    fit.Add(received_ns, static_cast<uint16_t>((1234 + i * 10) & 0xFFFF));
+  }
+  EXPECT_EQ(fit.frames(), 6000u);
+  EXPECT_EQ(fit.Scale(), 10.0);
+}
+
+TEST(ReplayTest, TheEncoderClockFitUnwrapsTheStampAndSurvivesAResetAndReordering) {
+  // 1x for 200 s: the 16-bit millisecond stamp wraps three times. Halfway the
+  // controller restarts (its stamp back to 0), and two frames arrive swapped.
+  ControllerClockFit fit;
+  uint16_t stamp = 65000;
+  std::vector<std::pair<int64_t, uint16_t>> frames;
+  for (int i = 0; i < 20000; ++i) {
+    if (i == 10000) stamp = 0;
+    frames.emplace_back(int64_t{i} * 10'000'000 + (i % 5) * 200'000, stamp);
+    stamp = static_cast<uint16_t>(stamp + 10);
+  }
+  std::swap(frames[15000], frames[15001]);
+  for (const auto& [ns, ms] : frames) fit.Add(ns, ms);
+  EXPECT_EQ(fit.Scale(), 1.0);
+  // 2.5x: two significant digits.
+  ControllerClockFit fit25;
+  for (int i = 0; i < 1000; ++i) fit25.Add(int64_t{i} * 4'000'000, static_cast<uint16_t>(i * 10));
+  EXPECT_EQ(fit25.Scale(), 2.5);
+  // Too little: under 100 frames, or under 1 s of robot time.
+  ControllerClockFit few;
+  for (int i = 0; i < 99; ++i) few.Add(int64_t{i} * 10'000'000, static_cast<uint16_t>(i * 10));
+  EXPECT_FALSE(few.Scale());
+  ControllerClockFit short_span;
+  for (int i = 0; i < 500; ++i) short_span.Add(int64_t{i} * 100'000, static_cast<uint16_t>(i / 10));
+  EXPECT_FALSE(short_span.Scale());
 }
 
 // A mission in process (the same exchange as sim/sim_run.cc), every frame written
