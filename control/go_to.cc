@@ -92,16 +92,7 @@ bool GoTo::TryGoal(double t, const Eigen::Vector2d& goal, double heading, bool a
   align_ = align;
   drop_contacts_ = false;
   PathPlanner::Progress p = Replan(t, slam, RangeScan{}, bumps);
-  if (p == PathPlanner::Progress::kFailed) {
-    // Boxed in by contacts close by: once more without them.
-    const Eigen::Vector2d at(slam.pose().x, slam.pose().y);
-    const auto& pts = bumps.points();
-    if (std::any_of(pts.begin(), pts.end(), [&](const Eigen::Vector2d& b) { return WithinDropped(b, at); })) {
-      drop_contacts_ = true;
-      drop_at_ = at;
-      p = Replan(t, slam, RangeScan{}, bumps);
-    }
-  }
+  if (p == PathPlanner::Progress::kFailed && DropNearContacts(slam, bumps)) p = Replan(t, slam, RangeScan{}, bumps);
   // Still searching: no path yet (not the last goal's either): Step waits for it.
   if (p == PathPlanner::Progress::kRunning) path_.clear();
   return p != PathPlanner::Progress::kFailed;
@@ -172,6 +163,21 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
   if (clock_) planning_ns_ += clock_() - t0;
   if (o.plan_cells_per_pop > 0) *Budget(t) -= planner_.start_cells() / o.plan_cells_per_pop;
   return p == PathPlanner::Progress::kRunning ? ContinuePlan(t) : Ended(p);
+}
+
+bool GoTo::DropNearContacts(const slam::Slam& slam, const BumpMemory& bumps) {
+  // Boxed in by contacts close by (a held bumper recorded at every heading while
+  // turning on the spot; pose corrections move old contacts under the body): the
+  // goal's plans leave them out from now on. Once per goal.
+  if (drop_contacts_) return false;
+  const Eigen::Vector2d at(slam.pose().x, slam.pose().y);
+  const auto& pts = bumps.points();
+  if (!std::any_of(pts.begin(), pts.end(), [&](const Eigen::Vector2d& b) { return WithinDropped(b, at); })) {
+    return false;
+  }
+  drop_contacts_ = true;
+  drop_at_ = at;
+  return true;
 }
 
 bool GoTo::WithinDropped(const Eigen::Vector2d& contact, const Eigen::Vector2d& at) const {
@@ -383,6 +389,15 @@ GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_s
     return blocked || path_.empty() ? Drive({0, 0}) : Drive(Pursue(me, front));
   }
   if (plan) {
+    if (*plan == PathPlanner::Progress::kFailed && DropNearContacts(slam, bumps)) {
+      // Boxed in by remembered contacts (a search longer than a period fails
+      // here, not in TryGoal; a replan on the way fails here too): plan again
+      // without those close by.
+      plan = Replan(t, slam, scan, bumps);
+      if (*plan == PathPlanner::Progress::kRunning) {
+        return blocked || path_.empty() ? Drive({0, 0}) : Drive(Pursue(me, front));
+      }
+    }
     if (*plan == PathPlanner::Progress::kFailed && path_.empty()) return GiveUp("no way found");
     Planned(t, *plan == PathPlanner::Progress::kFound);
     if (!last_plan_ok_ && blocked) return Drive({0, o.k_heading * o.look_around_factor});  // blocked: look around

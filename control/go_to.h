@@ -175,6 +175,10 @@ class GoTo {
   // Bearing (robot frame) of what Front found closest; 0 when that was the
   // front sensors' distance.
   double FrontBearing(const RangeScan& scan, const WallFollower& follower) const;
+  // Boxed in: this goal's plans leave out the contacts within boxed_in_contacts_m
+  // of the robot from now on. False (nothing changed) when already done for this
+  // goal or no contact is that close.
+  bool DropNearContacts(const slam::Slam& slam, const BumpMemory& bumps);
   // A remembered contact within boxed_in_contacts_m of at (never when it is 0).
   bool WithinDropped(const Eigen::Vector2d& contact, const Eigen::Vector2d& at) const;
 
@@ -209,7 +213,7 @@ class GoTo {
   Eigen::Vector2d last_contact_ = Eigen::Vector2d::Zero();
   double blocked_since_ = -1;  // blocked ahead with a path since then (-1: not)
   // This goal's plans leave out the contacts within boxed_in_contacts_m of
-  // drop_at_ (set by TryGoal when boxed in there).
+  // drop_at_ (set by DropNearContacts when boxed in there).
   bool drop_contacts_ = false;
   Eigen::Vector2d drop_at_ = Eigen::Vector2d::Zero();
   double progress_t_ = -1;  // got go_to_progress_m further at this time ...

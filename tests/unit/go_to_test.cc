@@ -132,6 +132,43 @@ TEST(GoToTest, BoxedInByItsOwnContactsPlansAgainWithoutTheNearOnes) {
   EXPECT_FALSE(g.TryGoal(0, {2, 0}, 0, false, r.slam, r.bumps));
 }
 
+TEST(GoToTest, BoxedInFoundOnlyByALongSearchPlansAgainWithoutTheNearContacts) {
+  // The search is spread over periods (a small budget): it fails in Step, not in
+  // TryGoal (seed 1040's cleaning: the robot under a chair, every route point
+  // given up, 540 s holding still). Boxed in, Step plans again without the ring
+  // and finds the way; without the option it gives the goal up.
+  for (const double boxed_in_m : {0.3, 0.0}) {
+    Rig r;
+    for (int deg = 0; deg < 360; deg += 10) r.bumps.Record({0, 0, deg * M_PI / 180}, 1);
+    GoToOptions o;
+    o.boxed_in_contacts_m = boxed_in_m;
+    o.plan_pops_per_period = 5;
+    GoTo g(o, r.o.slam.geometry, r.o.slam.mounts);
+    ASSERT_TRUE(g.TryGoal(0, {2, 0}, 0, false, r.slam, r.bumps)) << "still searching";
+    EXPECT_TRUE(g.path().empty());
+    g.Begin(0);
+    GoTo::Result res{};
+    double t = 0;
+    for (; t < 10 && g.path().empty(); t += 0.02) {
+      res = g.Step(t, r.slam, RangeScan{}, 0, r.bumps, r.follower);
+      if (res.status != GoTo::Status::kDriving) break;
+    }
+    if (boxed_in_m == 0) {
+      EXPECT_EQ(res.status, GoTo::Status::kGiveUp) << t;
+      EXPECT_EQ(res.why, "no way found");
+      EXPECT_LT(t, 1.0);
+      continue;
+    }
+    ASSERT_EQ(res.status, GoTo::Status::kDriving) << res.why;
+    ASSERT_FALSE(g.path().empty()) << t;
+    EXPECT_NEAR((g.path().back() - Eigen::Vector2d(2, 0)).norm(), 0, 1e-9);
+    // It goes on driving (its replans leave the ring out).
+    for (const double end = t + 2; t < end; t += 0.02) {
+      ASSERT_EQ(g.Step(t, r.slam, RangeScan{}, 0, r.bumps, r.follower).status, GoTo::Status::kDriving) << t;
+    }
+  }
+}
+
 TEST(GoToTest, GivesUpAfterTheStuckTime) {
   for (double stuck : {25.0, 10.0}) {
     Rig r;
