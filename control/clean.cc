@@ -30,6 +30,8 @@ GoToOptions CleaningGoTo(GoToOptions g, const CleaningOptions& c) {
   // Below the clearance, so a start inside it can still be left.
   g.hard_clearance_m = std::min(g.hard_clearance_m, 0.5 * g.clearance_m);
   g.front_stop_m = 0.1;
+  g.boxed_in_contacts_m = c.boxed_in_contacts_m;
+  g.under_body_contacts_m = c.under_body_contacts_m;
   return g;
 }
 

@@ -53,6 +53,13 @@ struct CleaningOptions {
   double resume_overlap = 0.9;     // resuming: a planned cell at least this share inside the
                                    // cells done before is done
   double stuck_s = 20;             // no 0.1 m of progress for this long: the route point is given up
+  // The cleaning's go-tos (to route points and home) are given these (GoToOptions'
+  // of the same names; exploring keeps its own, 0: the exploring campaigns lost
+  // runs with them on): no way found with remembered contacts within
+  // boxed_in_contacts_m, plan once more without them; plans leave out contacts
+  // closer than under_body_contacts_m to the robot (stale: it is there).
+  double boxed_in_contacts_m = 0.3;
+  double under_body_contacts_m = 0.14;
   int max_goal_failures = 4;       // route points given up in a row: the rest of the cell is given up
   double max_time_s = 3600;        // cleaning plus going home, robot time
   double home_tolerance_m = 0.05;  // home is reached within this

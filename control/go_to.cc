@@ -81,6 +81,8 @@ options::Table<GoToOptions> GoToKeys() {
        "blocked ahead this long with a path found: back off from what is ahead (0: never)"},
       {"boxed_in_contacts_m", &O::boxed_in_contacts_m, 0, 2, "m",
        "no way found with remembered contacts this close: plan again without them (0: never)"},
+      {"under_body_contacts_m", &O::under_body_contacts_m, 0, 0.5, "m",
+       "plans leave out remembered contacts closer than this to the robot, under its body (0: never)"},
   };
   return kKeys;
 }
@@ -141,11 +143,16 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
     const Eigen::Vector2d d = (l.p1 - l.p0).normalized();
     obstacles.push_back({l.p0 - o.line_extension_m * d, l.p1 + o.line_extension_m * d});
   }
+  const Eigen::Vector2d here(slam.pose().x, slam.pose().y);
   for (const auto& b : bumps.points()) {
+    if ((b - here).norm() < o.under_body_contacts_m) continue;
     if (!drop_contacts_ || !WithinDropped(b, drop_at_)) obstacles.push_back({b, b});
   }
   const size_t n_static = obstacles.size();
-  // What the IR sensors see now, mapped or not.
+  // What the IR sensors see now, mapped or not. The contacts are above as
+  // points; the bump memory's virtual readings of them (BumpMemory::Apply) would
+  // put back those left out (under the body, boxing the robot in): Step passes
+  // the raw readings when it may leave any out.
   const Pose2 me = slam.pose();
   for (int i = 0; i < kNumIrSensors; ++i) {
     if (!scan.range_m[i]) continue;
@@ -377,12 +384,17 @@ GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_s
   // robot holds still meanwhile if blocked or without a path yet (it looks
   // around if blocked after a failed plan, as it would have), else it follows
   // the path it has.
+  // A go-to that may leave contacts out of its plans plans round the raw
+  // readings: the bump memory's virtual readings would put those contacts back
+  // (Replan). One that never does keeps planning round the readings it steers by,
+  // as the exploring campaigns were measured with.
+  const RangeScan& plan_scan = o.boxed_in_contacts_m > 0 || o.under_body_contacts_m > 0 ? raw_scan : scan;
   std::optional<PathPlanner::Progress> plan;
   if (planner_.running()) {
     plan = ContinuePlan(t);
   } else if ((blocked && t >= retry_at_) || t - last_plan_ > o.replan_period_s) {
     last_plan_ = t;
-    plan = Replan(t, slam, scan, bumps);
+    plan = Replan(t, slam, plan_scan, bumps);
   }
   if (plan == PathPlanner::Progress::kRunning) {
     if (blocked && !last_plan_ok_) return Drive({0, o.k_heading * o.look_around_factor});  // as before
@@ -393,7 +405,7 @@ GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_s
       // Boxed in by remembered contacts (a search longer than a period fails
       // here, not in TryGoal; a replan on the way fails here too): plan again
       // without those close by.
-      plan = Replan(t, slam, scan, bumps);
+      plan = Replan(t, slam, plan_scan, bumps);
       if (*plan == PathPlanner::Progress::kRunning) {
         return blocked || path_.empty() ? Drive({0, 0}) : Drive(Pursue(me, front));
       }

@@ -94,6 +94,10 @@ struct GoToOptions {
   // guard the way. 0: never (the default: over the campaigns, 0.3 m cleaned
   // more but touched more; docs/cleaning.md).
   double boxed_in_contacts_m = 0;
+  // Plans leave out remembered contacts closer than this to the robot: under
+  // its body, where it is now, they are stale (recorded at the body's edge, they
+  // come there when the pose is corrected). 0: never.
+  double under_body_contacts_m = 0;
   PlannerOptions planner;  // grid; inflation and hard distance come from the above
 };
 options::Table<GoToOptions> GoToKeys();
