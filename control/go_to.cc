@@ -10,8 +10,7 @@ options::Table<GoToOptions> GoToKeys() {
   static constexpr options::Key<O> kKeys[] = {
       {"clearance_m", &O::clearance_m, 0, 1, "m",
        "planned paths keep the robot radius plus this from mapped lines"},
-      {"goal_tolerance_m", &O::goal_tolerance_m, 0.01, 1, "m",
-       "a go-to goal is reached within this"},
+      {"goal_tolerance_m", &O::goal_tolerance_m, 0.01, 1, "m", "a go-to goal is reached within this"},
       {"heading_tolerance_rad", &O::heading_tolerance_rad, 0.01, 1, "rad",
        "heading reached at P1 within this"},
       {"cruise_speed_mps", &O::cruise_speed_mps, 0.01, 2, "m/s", "speed along a planned path"},
@@ -82,7 +81,7 @@ options::Table<GoToOptions> GoToKeys() {
       {"boxed_in_contacts_m", &O::boxed_in_contacts_m, 0, 2, "m",
        "no way found with remembered contacts this close: plan again without them (0: never)"},
       {"under_body_contacts_m", &O::under_body_contacts_m, 0, 0.5, "m",
-       "plans leave out remembered contacts closer than this to the robot, under its body (0: never)"},
+       "plans leave out remembered contacts closer than this, under the body (0: never)"},
   };
   return kKeys;
 }
@@ -339,28 +338,31 @@ bool GoTo::BlockedTooLong(double t, bool blocked) {
   return true;
 }
 
+bool GoTo::OnContact(double t, const slam::Slam& slam, double bearing) {
+  // The same contact again (not got clear of it yet) is not a second one.
+  const auto& o = options_;
+  const Pose2 p = slam.pose();
+  const bool same = bumps_ >= 1 &&
+                    std::hypot(p.x - last_contact_.x(), p.y - last_contact_.y()) < o.same_contact_m &&
+                    ++same_contact_escapes_ < o.same_contact_escapes;
+  if (!same) same_contact_escapes_ = 0;
+  last_contact_ = {p.x, p.y};
+  if (bumps_ >= 1 && !same) return false;
+  if (!same) ++bumps_;
+  BeginEscape(t, slam, bearing);
+  return true;
+}
+
 GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_scan,
                         uint8_t bumpers, const BumpMemory& bumps, const WallFollower& follower) {
   const auto& o = options_;
   if (t - since_ > o.go_to_timeout_s) return GiveUp("not reached in time");
   if (NoProgress(t, slam.pose())) return GiveUp("no way found");
-  if (bumpers != 0 && t >= backoff_until_) {
-    // The same contact again (not got clear of it yet) is not a second one.
-    const Pose2 p = slam.pose();
-    const bool same =
-        bumps_ >= 1 &&
-        std::hypot(p.x - last_contact_.x(), p.y - last_contact_.y()) < o.same_contact_m &&
-        ++same_contact_escapes_ < o.same_contact_escapes;
-    if (!same) same_contact_escapes_ = 0;
-    last_contact_ = {p.x, p.y};
-    if (bumps_ >= 1 && !same) {
-      // A second contact on the way: the way there is blocked by things the
-      // beams miss (chair legs). Do not push on through them: give the goal up
-      // (the next behaviour gets clear of the contact first).
-      return GiveUp("the way is blocked by obstacles the sensors miss");
-    }
-    if (!same) ++bumps_;
-    BeginEscape(t, slam, bumps.ContactBearing(bumpers));
+  if (bumpers != 0 && t >= backoff_until_ && !OnContact(t, slam, bumps.ContactBearing(bumpers))) {
+    // A second contact on the way: the way there is blocked by things the
+    // beams miss (chair legs). Do not push on through them: give the goal up
+    // (the next behaviour gets clear of the contact first).
+    return GiveUp("the way is blocked by obstacles the sensors miss");
   }
   if (t < backoff_until_) return Drive(Escape(t, slam.pose()));
   const Pose2 me = slam.pose();

@@ -179,6 +179,9 @@ class GoTo {
   // Bearing (robot frame) of what Front found closest; 0 when that was the
   // front sensors' distance.
   double FrontBearing(const RangeScan& scan, const WallFollower& follower) const;
+  // A contact (at bearing, robot frame): begins the escape from it, or false
+  // when it is this go-to's second one (not the same one again).
+  bool OnContact(double t, const slam::Slam& slam, double bearing);
   // Boxed in: this goal's plans leave out the contacts within boxed_in_contacts_m
   // of the robot from now on. False (nothing changed) when already done for this
   // goal or no contact is that close.
