@@ -142,9 +142,9 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
     const Eigen::Vector2d d = (l.p1 - l.p0).normalized();
     obstacles.push_back({l.p0 - o.line_extension_m * d, l.p1 + o.line_extension_m * d});
   }
-  const Eigen::Vector2d here(slam.pose().x, slam.pose().y);
+  const Pose2 me = slam.pose();
   for (const auto& b : bumps.points()) {
-    if ((b - here).norm() < o.under_body_contacts_m) continue;
+    if ((b - Eigen::Vector2d(me.x, me.y)).norm() < o.under_body_contacts_m) continue;
     if (!drop_contacts_ || !WithinDropped(b, drop_at_)) obstacles.push_back({b, b});
   }
   const size_t n_static = obstacles.size();
@@ -152,7 +152,6 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
   // points; the bump memory's virtual readings of them (BumpMemory::Apply) would
   // put back those left out (under the body, boxing the robot in): Step passes
   // the raw readings when it may leave any out.
-  const Pose2 me = slam.pose();
   for (int i = 0; i < kNumIrSensors; ++i) {
     if (!scan.range_m[i]) continue;
     const BeamHit h = HitPoint(mounts_[i], *scan.range_m[i]);

@@ -142,13 +142,16 @@ void ControllerClockFit::Add(int64_t log_ns, uint16_t stamp_ms) {
   ++frames_;
 }
 
+void ControllerClockFit::AddOpenSegment(double* cxx, double* cxy, double* span) const {
+  if (n_ < 2) return;
+  const double n = static_cast<double>(n_);
+  *cxx += sxx_ - sx_ * sx_ / n;
+  *cxy += sxy_ - sx_ * sy_ / n;
+  *span += robot_s_;
+}
+
 void ControllerClockFit::CloseSegment() {
-  if (n_ >= 2) {
-    const double n = static_cast<double>(n_);
-    cxx_ += sxx_ - sx_ * sx_ / n;
-    cxy_ += sxy_ - sx_ * sy_ / n;
-    span_s_ += robot_s_;
-  }
+  AddOpenSegment(&cxx_, &cxy_, &span_s_);
   sx_ = sy_ = sxx_ = sxy_ = 0;
   n_ = 0;
 }
@@ -160,12 +163,7 @@ std::optional<double> ControllerClockFit::Scale() const {
 
 std::optional<double> ControllerClockFit::Measured() const {
   double cxx = cxx_, cxy = cxy_, span = span_s_;
-  if (n_ >= 2) {
-    const double n = static_cast<double>(n_);
-    cxx += sxx_ - sx_ * sx_ / n;
-    cxy += sxy_ - sx_ * sy_ / n;
-    span += robot_s_;
-  }
+  AddOpenSegment(&cxx, &cxy, &span);
   // cxy / cxx: log seconds per robot second.
   if (frames_ < 100 || span < 1.0 || cxx <= 0 || cxy <= 0) return std::nullopt;
   return cxx / cxy;

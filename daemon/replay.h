@@ -108,6 +108,8 @@ class ControllerClockFit {
   size_t frames() const { return frames_; }
 
  private:
+  // Adds the open segment's centred sums and span (none under two frames).
+  void AddOpenSegment(double* cxx, double* cxy, double* span) const;
   void CloseSegment();
   // The open segment: sums of x = robot s, y = log s, both from its first frame.
   double sx_ = 0, sy_ = 0, sxx_ = 0, sxy_ = 0;
