@@ -37,10 +37,89 @@ PoseError Max(const PoseError& a, const PoseError& b) {
   return {std::max(a.position_m, b.position_m), std::max(a.heading_rad, b.heading_rad)};
 }
 
+Eigen::Vector2d Centre(const sim::Box& b) { return {0.5 * (b.xmin + b.xmax), 0.5 * (b.ymin + b.ymax)}; }
+
+// The centre of a map-frame box in the world frame.
+Eigen::Vector2d CentreInWorld(const control::Box& b, const Pose2& map_to_world) {
+  const Pose2 c = Compose(map_to_world, Pose2{0.5 * (b.xmin + b.xmax), 0.5 * (b.ymin + b.ymax), 0});
+  return {c.x, c.y};
+}
+
+// Distance between two axis-aligned boxes (0 when they touch or overlap).
+double Gap(const sim::Box& a, const sim::Box& b) {
+  const double gx = std::max({0.0, b.xmin - a.xmax, a.xmin - b.xmax});
+  const double gy = std::max({0.0, b.ymin - a.ymax, a.ymin - b.ymax});
+  return std::hypot(gx, gy);
+}
+
+// The saved map's object for world object `index`: the one whose centre lies
+// nearest the piece's, within 0.3 m; 0 if none.
+int SavedObjectFor(const sim::World& world, size_t index, const robot::MapSnapshot& saved,
+                   const Pose2& map_to_world) {
+  const Eigen::Vector2d c = Centre(world.objects[index]);
+  int id = 0;
+  double best = 0.3;
+  for (const auto& o : saved.objects) {
+    const double d = (CentreInWorld(o.box, map_to_world) - c).norm();
+    if (d < best) {
+      best = d;
+      id = o.id;
+    }
+  }
+  return id;
+}
+
+// The move for run `seed`: a piece the saved map modelled, one of the four
+// directions, among the allowed ones (uniform); world_index -1 if none.
+RelocRun::Moved PickMove(const sim::World& world, const robot::MapSnapshot& saved, const Pose2& map_to_world,
+                         const RelocOptions& ro, uint64_t seed) {
+  std::vector<RelocRun::Moved> candidates;
+  const double steps[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+  for (size_t k = 0; k < world.objects.size(); ++k) {
+    const int id = SavedObjectFor(world, k, saved, map_to_world);
+    if (id == 0) continue;
+    for (const auto& s : steps) {
+      if (!MoveObject(world, k, s[0] * ro.move_m, s[1] * ro.move_m, ro.move_gap_m)) continue;
+      RelocRun::Moved m;
+      m.world_index = static_cast<int>(k);
+      m.saved_id = id;
+      m.dx = s[0] * ro.move_m;
+      m.dy = s[1] * ro.move_m;
+      candidates.push_back(m);
+    }
+  }
+  if (candidates.empty()) return {};
+  std::mt19937_64 rng(seed * 104729 + 7);
+  return candidates[std::uniform_int_distribution<size_t>(0, candidates.size() - 1)(rng)];
+}
+
+// Scores the move against the run's final map: the piece's saved id at its new
+// place with a note, nothing left where it was.
+void ScoreMove(const sim::World& before, const robot::MapSnapshot& out, const Pose2& map_to_world,
+               const RelocOptions& ro, RelocRun::Moved* m) {
+  const sim::Box& was = before.objects[static_cast<size_t>(m->world_index)];
+  const Eigen::Vector2d old_c = Centre(was), new_c = old_c + Eigen::Vector2d(m->dx, m->dy);
+  bool at_new = false, left_at_old = false;
+  m->box = "gone";
+  for (const auto& o : out.objects) {
+    const Eigen::Vector2d c = CentreInWorld(o.box, map_to_world);
+    if ((c - old_c).norm() <= ro.moved_match_m) left_at_old = true;
+    if (o.id != m->saved_id) continue;
+    m->noted = o.note.rfind("moved", 0) == 0;
+    at_new = (c - new_c).norm() <= ro.moved_match_m;
+    m->box = F(c.x(), 2) + ", " + F(c.y(), 2);
+  }
+  m->updated = at_new && !left_at_old;
+}
+
+// One run from `start` in `base`; unmoved: the world before a piece was moved
+// (RelocOptions::move_m; `moved` says which), to score the move.
 RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options,
                 const robot::MapSnapshot& saved, const Pose2& map_to_world, const Pose2& start,
-                uint64_t seed, const RelocOptions& ro) {
+                uint64_t seed, const RelocOptions& ro, const sim::World* unmoved = nullptr,
+                const RelocRun::Moved& moved = {}) {
   RelocRun r;
+  r.moved = moved;
   r.start = start;
   r.seed = seed;
   sim::World world = base;
@@ -82,9 +161,11 @@ RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options,
       wrong_since = -1;
     }
   };
-  setup.stop_when = [&](const sim::InProcessRun& run) {
-    return r.committed && run.t >= r.commit_t + ro.after_commit_s;
-  };
+  if (ro.move_m <= 0) {
+    setup.stop_when = [&](const sim::InProcessRun& run) {
+      return r.committed && run.t >= r.commit_t + ro.after_commit_s;
+    };
+  }
   robot::CoreOptions o = options;
   if (saved.calibration) o.slam.initial_calibration = saved.calibration;
   const sim::InProcessRun run =
@@ -105,6 +186,7 @@ RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options,
   // Still off when the run ended (done, or the time limit): never recovered.
   if (wrong_since >= 0) r.confidently_wrong = true;
   r.correct = r.committed && !r.confidently_wrong && !Wrong(r.final_error, ro);
+  if (unmoved && moved.world_index >= 0) ScoreMove(*unmoved, out, map_to_world, ro, &r.moved);
   return r;
 }
 
@@ -235,15 +317,65 @@ RelocWorld EvaluateRelocalization(const sim::World& world, const robot::CoreOpti
   const double clearance = options.slam.geometry.radius_m + ro.clearance_extra_m;
   const std::vector<Pose2> starts =
       RandomFreeStarts(world, ro.runs, clearance, ro.seed * 7919 + 13);
-  for (size_t i = 0; i < starts.size(); ++i) {
-    w.runs.push_back(RunOne(world, explore, saved, w.map_to_world, starts[i], ro.seed + 1 + i, ro));
+  if (ro.move_m <= 0) {
+    for (size_t i = 0; i < starts.size(); ++i) {
+      w.runs.push_back(RunOne(world, explore, saved, w.map_to_world, starts[i], ro.seed + 1 + i, ro));
+    }
+    return w;
+  }
+  // One piece moved per run, then the saved map's cleaning (the robot passes the piece).
+  robot::CoreOptions clean = options;
+  clean.mission.mode = "clean";
+  for (int i = 0; i < ro.runs; ++i) {
+    const uint64_t seed = ro.seed + 1 + static_cast<uint64_t>(i);
+    const RelocRun::Moved m = PickMove(world, saved, w.map_to_world, ro, seed);
+    const sim::World moved =
+        m.world_index < 0 ? world : *MoveObject(world, static_cast<size_t>(m.world_index), m.dx, m.dy, ro.move_gap_m);
+    const std::vector<Pose2> start = RandomFreeStarts(moved, 1, clearance, seed * 7919 + 13);
+    if (start.empty()) continue;
+    w.runs.push_back(RunOne(moved, clean, saved, w.map_to_world, start[0], seed, ro, &world, m));
   }
   return w;
+}
+
+std::optional<sim::World> MoveObject(const sim::World& world, size_t index, double dx, double dy,
+                                     double gap_m) {
+  if (index >= world.objects.size()) return std::nullopt;
+  sim::World out = world;
+  const sim::Box& was = world.objects[index];
+  sim::Box& b = out.objects[index];
+  b = {was.xmin + dx, was.ymin + dy, was.xmax + dx, was.ymax + dy};
+  for (size_t k = 0; k < world.objects.size(); ++k) {
+    if (k != index && Gap(b, world.objects[k]) < gap_m) return std::nullopt;
+  }
+  // Inside the room: its corners (just inside) in the outline, no wall through it.
+  sim::World room = world;
+  room.objects.clear();
+  constexpr double kIn = 1e-3;
+  const Pose2 corners[] = {{b.xmin + kIn, b.ymin + kIn, 0}, {b.xmax - kIn, b.ymin + kIn, 0},
+                           {b.xmax - kIn, b.ymax - kIn, 0}, {b.xmin + kIn, b.ymax - kIn, 0}};
+  std::string why;
+  for (const Pose2& c : corners) {
+    if (!sim::FreePose(room, c, 0, &why)) return std::nullopt;
+  }
+  for (const sim::Segment& s : room.Segments()) {
+    const sim::Box wall{std::min(s.a.x, s.b.x), std::min(s.a.y, s.b.y), std::max(s.a.x, s.b.x),
+                        std::max(s.a.y, s.b.y)};
+    if (wall.xmax > b.xmin + kIn && wall.xmin < b.xmax - kIn && wall.ymax > b.ymin + kIn &&
+        wall.ymin < b.ymax - kIn)
+      return std::nullopt;
+    const double g = Gap(b, wall);
+    // Far enough from the wall, or still against a wall it stood against (moved along it).
+    if (g >= gap_m || (g < 1e-9 && Gap(was, wall) < 1e-9)) continue;
+    return std::nullopt;
+  }
+  return out;
 }
 
 std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOptions& ro,
                           const std::string& command) {
   std::ostringstream md;
+  const bool mv = ro.move_m > 0;
   md << "# Relocalisation in a saved map: results\n\n"
      << "Generated by `" << command
      << "` (tests/tools/reloc_eval.h; docs/relocalization.md says how to read it). "
@@ -252,9 +384,9 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
      << " runs from random free start poses (uniform in the room, at least the robot radius + "
      << F(ro.clearance_extra_m * 100, 0)
      << " cm from walls and furniture, uniform heading) start from it, "
-     << "each up to " << F(ro.max_time_s, 0) << " s robot time and ending "
-     << F(ro.after_commit_s, 0)
-     << " s after the commit. Errors are in the world frame through the least-squares fit of the "
+     << "each up to " << F(ro.max_time_s, 0) << " s robot time"
+     << (mv ? "" : " and ending " + F(ro.after_commit_s, 0) + " s after the commit")
+     << ". Errors are in the world frame through the least-squares fit of the "
         "first "
         "mission's map trajectory onto its true trajectory (fit residual below). *Confidently "
         "wrong*: committed "
@@ -263,14 +395,27 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
      << "° off and not back within " << F(ro.recover_s, 0)
      << " s, or still off when the run ended. *Correct*: committed, never confidently wrong, "
         "within those bounds at the end.\n\n";
+  if (mv) {
+    md << "Moved furniture: before each run one piece the saved map modelled was moved by "
+       << F(ro.move_m, 2) << " m along x or y (seeded; to a place inside the room at least "
+       << F(ro.move_gap_m, 2)
+       << " m from every other piece and from the walls, or still against the wall it stood against); "
+          "the runs then clean until done or the time limit (the robot has to pass the piece). *Move noted*: "
+          "the saved map's object for the piece ends with a \"moved ...\" note. *Model updated*: that object "
+          "(same id) ends within "
+       << F(ro.moved_match_m * 100, 0)
+       << " cm of the piece's new centre, and no object is left within that of the old one.\n\n";
+  }
   md << "| world | map | fit rms cm | runs | committed | correct | confidently wrong | time to "
         "relocalise s median | "
         "worst | error at commit cm median / max | heading at commit deg max | max error after "
         "(from commit + 5 s) "
-        "cm / deg | saved ids kept | duplicate lines |\n"
-     << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "cm / deg | saved ids kept | duplicate lines |"
+     << (mv ? " pieces moved | move noted | model updated |" : "") << "\n"
+     << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|" << (mv ? "---|---|---|" : "") << "\n";
   for (const RelocWorld& w : worlds) {
-    int committed = 0, correct = 0, wrong = 0, kept = 0, saved = 0, dups = 0;
+    int committed = 0, correct = 0, wrong = 0, kept = 0, saved = 0, dups = 0, moves = 0, noted = 0,
+        updated = 0;
     std::vector<double> times, at_commit;
     double heading_max = 0, after_m = 0, after_deg = 0, at_commit_max = 0;
     bool any_after = false;
@@ -281,6 +426,9 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
       kept += r.kept_ids;
       saved += r.saved_lines;
       dups += r.duplicates;
+      moves += r.moved.world_index >= 0;
+      noted += r.moved.noted;
+      updated += r.moved.updated;
       if (!r.committed) continue;
       times.push_back(r.relocalize_s);
       at_commit.push_back(r.at_commit.position_m * 100);
@@ -301,13 +449,16 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
        << " | " << (any ? F(Quantile(at_commit, 0.5)) + " / " + F(at_commit_max) : "-") << " | "
        << (any ? F(heading_max) : "-") << " | "
        << (any_after ? F(after_m) + " / " + F(after_deg) : "-") << " | " << kept << "/" << saved
-       << " | " << dups << " |\n";
+       << " | " << dups << " |";
+    if (mv) md << " " << moves << " | " << noted << "/" << moves << " | " << updated << "/" << moves << " |";
+    md << "\n";
   }
   md << "\n## Every run\n\n"
      << "| world | seed | start (world) | end | committed at s (time to relocalise) | hypotheses | "
         "attempts | error at commit cm / deg | "
-        "final error cm / deg | confidently wrong | ids kept | duplicates |\n"
-     << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "final error cm / deg | confidently wrong | ids kept | duplicates |"
+     << (mv ? " piece moved (world index: saved id, by) | noted | updated | its box centre at the end |" : "")
+     << "\n|---|---|---|---|---|---|---|---|---|---|---|---|" << (mv ? "---|---|---|---|" : "") << "\n";
   for (const RelocWorld& w : worlds) {
     for (const RelocRun& r : w.runs) {
       md << "| " << w.world << " | " << r.seed << " | " << F(r.start.x, 2) << ", "
@@ -323,7 +474,17 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
                  ? F(r.final_error.position_m * 100) + " / " + F(r.final_error.heading_rad * kDeg)
                  : "-")
          << " | " << (r.confidently_wrong ? "yes" : "no") << " | " << r.kept_ids << "/"
-         << r.saved_lines << " | " << r.duplicates << " |\n";
+         << r.saved_lines << " | " << r.duplicates << " |";
+      if (mv) {
+        const RelocRun::Moved& m = r.moved;
+        if (m.world_index < 0) {
+          md << " none could be moved | - | - | - |";
+        } else {
+          md << " " << m.world_index << ": " << m.saved_id << ", " << F(m.dx, 2) << ", " << F(m.dy, 2) << " | "
+             << (m.noted ? "yes" : "no") << " | " << (m.updated ? "yes" : "no") << " | " << m.box << " |";
+        }
+      }
+      md << "\n";
     }
   }
   return md.str();

@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -83,6 +84,15 @@ struct RelocRun {
                                    // (or still off when the run ended)
   bool correct = false;  // committed and the error at commit within 20 cm and 10 deg, never wrong
   int saved_lines = 0, kept_ids = 0, duplicates = 0;
+  // RelocOptions::move_m > 0: the piece of furniture moved before this run.
+  struct Moved {
+    int world_index = -1;  // in the world's objects; -1: none could be moved
+    int saved_id = 0;      // the saved map's object for it
+    double dx = 0, dy = 0; // world frame
+    bool noted = false;    // the object with saved_id carries a "moved ..." note
+    bool updated = false;  // saved_id at the new place, and no object left at the old one
+    std::string box;       // saved_id's box at the end (world frame centre), or "gone"
+  } moved;
 };
 
 struct RelocWorld {
@@ -105,7 +115,22 @@ struct RelocOptions {
   double wrong_position_m = 0.20;
   double wrong_heading_rad = 10 * M_PI / 180;
   double recover_s = 30;
+  // Moved furniture (issue 14: "one piece of furniture moved by 0.5 m between
+  // the missions"): > 0 moves one piece per run by this much along x or y
+  // (seeded; only pieces the saved map modelled, only to places inside the
+  // room at least move_gap_m from every other piece and from the walls, or
+  // still against the wall it stood against), and the runs clean (the robot
+  // has to pass the piece) until done or max_time_s.
+  double move_m = 0;
+  double move_gap_m = 0.45;    // the robot (0.34 m) passes with room to spare
+  double moved_match_m = 0.15; // an object's centre this close to a piece's is that piece
 };
+
+// The world with objects[index] shifted by (dx, dy), if the move is allowed
+// (RelocOptions::move_m): inside the room, no wall through it, at least gap_m
+// from every other piece and from every wall it does not touch.
+std::optional<sim::World> MoveObject(const sim::World& world, size_t index, double dx, double dy,
+                                     double gap_m);
 
 RelocWorld EvaluateRelocalization(const sim::World& world, const robot::CoreOptions& options,
                                   const RelocOptions& ro);

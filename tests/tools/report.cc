@@ -161,10 +161,14 @@ int RunCampaignReport(const robot::CoreOptions& options, const std::string& prof
 // Issue 14: relocalisation in a saved map (tests/tools/reloc_eval.h); writes
 // relocalization-results.md in out_dir.
 int RunRelocReport(const robot::CoreOptions& options, const std::string& worlds_dir, const std::string& names,
-                   int runs, uint64_t seed, const std::string& out_dir) {
+                   int runs, uint64_t seed, double move_m, const std::string& out_dir) {
   metrics::RelocOptions ro;
   ro.runs = runs;
   ro.seed = seed;
+  if (move_m > 0) {
+    ro.move_m = move_m;
+    ro.max_time_s = 1500;  // a whole cleaning
+  }
   std::vector<metrics::RelocWorld> results;
   std::stringstream list(names);
   for (std::string name; std::getline(list, name, ',');) {
@@ -182,8 +186,9 @@ int RunRelocReport(const robot::CoreOptions& options, const std::string& worlds_
                  results.back().runs.size());
   }
   const std::string command = "irslam-report --reloc " + std::to_string(runs) + " --reloc-worlds " + names +
-                              " --first-seed " + std::to_string(seed);
-  const std::string path = out_dir + "/relocalization-results.md";
+                              " --first-seed " + std::to_string(seed) +
+                              (move_m > 0 ? " --reloc-move " + F(move_m, 2) : "");
+  const std::string path = out_dir + (move_m > 0 ? "/relocalization-moved-results.md" : "/relocalization-results.md");
   if (!Write(path, metrics::RelocMarkdown(results, ro, command))) {
     std::fprintf(stderr, "irslam-report: cannot write %s\n", path.c_str());
     return 1;
@@ -254,6 +259,11 @@ int main(int argc, char** argv) {
                  "poses per world (relocalization-results.md in --out; docs/relocalization.md)")
       ->check(CLI::Range(1, 1000));
   app.add_option("--reloc-worlds", reloc_worlds, "--reloc: the worlds (names in --worlds), comma-separated");
+  double reloc_move = 0;
+  app.add_option("--reloc-move", reloc_move,
+                 "--reloc: move one piece of furniture by this much (m) before each run, which then cleans; "
+                 "relocalization-moved-results.md in --out (docs/relocalization.md)")
+      ->check(CLI::Range(0.0, 2.0));
   std::string reloc_picture;
   app.add_option("--reloc-picture", reloc_picture,
                  "Instead of the accuracy report: an SVG of relocalisation's pose hypotheses at their last "
@@ -272,7 +282,7 @@ int main(int argc, char** argv) {
     return RunRelocPicture(defaults, worlds_dir, reloc_worlds.substr(0, reloc_worlds.find(',')), first_seed,
                            reloc_picture);
   }
-  if (reloc_runs > 0) return RunRelocReport(defaults, worlds_dir, reloc_worlds, reloc_runs, first_seed, out_dir);
+  if (reloc_runs > 0) return RunRelocReport(defaults, worlds_dir, reloc_worlds, reloc_runs, first_seed, reloc_move, out_dir);
   if (mode == "clean") {
     return RunCleanReport(defaults, worlds_dir,
                           {"fig14", "fig16", "fig17", "fig18", "fig19", "fig20", "free_start", "corner_start"},
