@@ -145,6 +145,30 @@ TEST(RelocEvalTest, FreePoseSaysWhyNot) {
 // a 4 x 3 m room, a local wall seen 1 m in front of the start, placed by the
 // right hypothesis onto the saved wall (same pixels as the saved line) and by
 // the mirrored one onto the opposite wall; the legend lists them best first.
+TEST(RelocEvalTest, FurnitureIsMovedOnlyToAFreePlaceOrAlongItsWall) {
+  sim::World w;
+  w.outline = {{0, 0}, {4, 0}, {4, 3}, {0, 3}};
+  w.objects = {{0, 1, 0.6, 2}, {2, 1, 2.5, 1.5}};  // against the left wall; free
+  w.start = {3, 2.5, 0};
+  // Away from its wall into free floor: allowed, shifted exactly.
+  const auto right = metrics::MoveObject(w, 0, 0.5, 0, 0.45);
+  ASSERT_TRUE(right.has_value());
+  EXPECT_DOUBLE_EQ(right->objects[0].xmin, 0.5);
+  EXPECT_DOUBLE_EQ(right->objects[0].xmax, 1.1);
+  EXPECT_DOUBLE_EQ(w.objects[0].xmin, 0.0);  // the world itself untouched
+  // Along its wall: allowed (still against it).
+  EXPECT_TRUE(metrics::MoveObject(w, 0, 0, 0.5, 0.45).has_value());
+  // Through the wall: refused.
+  EXPECT_FALSE(metrics::MoveObject(w, 0, -0.5, 0, 0.45).has_value());
+  // The free piece moved to 0.4 m from the other one: refused (0.45 m needed).
+  EXPECT_FALSE(metrics::MoveObject(w, 1, -1.0, 0, 0.45).has_value());
+  EXPECT_TRUE(metrics::MoveObject(w, 1, -0.9, 0, 0.45).has_value());  // 0.5 m from it
+  // 0.5 m up leaves 1.0 m to the top wall: allowed; 0.2 m from the right wall: refused.
+  EXPECT_TRUE(metrics::MoveObject(w, 1, 0, 0.5, 0.45).has_value());
+  EXPECT_FALSE(metrics::MoveObject(w, 1, 1.3, 0, 0.45).has_value());
+  EXPECT_FALSE(metrics::MoveObject(w, 5, 0.5, 0, 0.45).has_value());  // no such piece
+}
+
 TEST(RelocPictureTest, EachHypothesisPlacesTheLocalLinesThroughItsTransform) {
   RelocPicture p;
   p.world = "box";
