@@ -37,11 +37,16 @@ PoseError Max(const PoseError& a, const PoseError& b) {
   return {std::max(a.position_m, b.position_m), std::max(a.heading_rad, b.heading_rad)};
 }
 
-Eigen::Vector2d Centre(const sim::Box& b) { return {0.5 * (b.xmin + b.xmax), 0.5 * (b.ymin + b.ymax)}; }
+// The centre of a box (the world's sim::Box or the model's control::Box).
+template <typename B>
+Eigen::Vector2d Centre(const B& b) {
+  return {0.5 * (b.xmin + b.xmax), 0.5 * (b.ymin + b.ymax)};
+}
 
 // The centre of a map-frame box in the world frame.
 Eigen::Vector2d CentreInWorld(const control::Box& b, const Pose2& map_to_world) {
-  const Pose2 c = Compose(map_to_world, Pose2{0.5 * (b.xmin + b.xmax), 0.5 * (b.ymin + b.ymax), 0});
+  const Eigen::Vector2d m = Centre(b);
+  const Pose2 c = Compose(map_to_world, Pose2{m.x(), m.y(), 0});
   return {c.x, c.y};
 }
 

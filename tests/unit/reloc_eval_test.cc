@@ -141,10 +141,6 @@ TEST(RelocEvalTest, FreePoseSaysWhyNot) {
   }
 }
 
-// The hypotheses picture draws each hypothesis' placement of the local map: in
-// a 4 x 3 m room, a local wall seen 1 m in front of the start, placed by the
-// right hypothesis onto the saved wall (same pixels as the saved line) and by
-// the mirrored one onto the opposite wall; the legend lists them best first.
 TEST(RelocEvalTest, FurnitureIsMovedOnlyToAFreePlaceOrAlongItsWall) {
   sim::World w;
   w.outline = {{0, 0}, {4, 0}, {4, 3}, {0, 3}};
@@ -169,6 +165,10 @@ TEST(RelocEvalTest, FurnitureIsMovedOnlyToAFreePlaceOrAlongItsWall) {
   EXPECT_FALSE(metrics::MoveObject(w, 5, 0.5, 0, 0.45).has_value());  // no such piece
 }
 
+// The hypotheses picture draws each hypothesis' placement of the local map: in
+// a 4 x 3 m room, a local wall seen 1 m in front of the start, placed by the
+// right hypothesis onto the saved wall (same pixels as the saved line) and by
+// the mirrored one onto the opposite wall; the legend lists them best first.
 TEST(RelocPictureTest, EachHypothesisPlacesTheLocalLinesThroughItsTransform) {
   RelocPicture p;
   p.world = "box";
