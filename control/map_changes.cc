@@ -88,12 +88,4 @@ std::vector<int> MapChanges::Step(const Pose2& me, const std::vector<slam::LineF
   return moved;
 }
 
-std::vector<int> MapChanges::StaleLinesOf(int object_id, const std::vector<slam::LineFeature>& lines) const {
-  std::vector<int> out;
-  for (const auto& w : sides_) {
-    if (w.object == object_id && (w.missing || !SeenAgain(w, lines))) out.push_back(w.side.id);
-  }
-  return out;
-}
-
 }  // namespace irslam::control

@@ -11,6 +11,7 @@
 #ifndef IRSLAM_CONTROL_MAP_CHANGES_H_
 #define IRSLAM_CONTROL_MAP_CHANGES_H_
 
+#include <algorithm>
 #include <vector>
 
 #include "control/room_geometry.h"
@@ -45,9 +46,10 @@ class MapChanges {
   // One period at map pose `me`; `lines` is the SLAM's map (map frame, ids).
   // Returns the ids of objects found moved in this period (each object once).
   std::vector<int> Step(const Pose2& me, const std::vector<slam::LineFeature>& lines);
-  // The line ids of moved object `id` to take out of the map: its sides not
-  // seen again (missing, or never passed); a side seen again stays.
-  std::vector<int> StaleLinesOf(int object_id, const std::vector<slam::LineFeature>& lines) const;
+  // Object `id` was found moved elsewhere (the IR check): not reported again.
+  void Reported(int object_id) {
+    if (std::find(reported_.begin(), reported_.end(), object_id) == reported_.end()) reported_.push_back(object_id);
+  }
 
  private:
   struct Watched {

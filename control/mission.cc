@@ -127,6 +127,7 @@ void Mission::Reset(double t) {
   changes_.Clear();
   line_removals_.clear();
   resume_cleaning_.reset();
+  remodel_after_clean_ = false;
 }
 
 void Mission::WatchChanges(const slam::Slam& slam, const std::vector<TimedPose>& trajectory) {
@@ -137,15 +138,20 @@ void Mission::StepChanges(const slam::Slam& slam) {
   // (In a saved map the SLAM's frame is the map's: its lines need no copy.)
   const std::vector<int> moved = slam.in_saved_map() ? changes_.Step(slam.map_pose(), slam.lines())
                                                      : changes_.Step(slam.map_pose(), slam.map_lines());
-  for (int id : moved) {
-    const auto& objects = modeler_.model().objects;
-    const auto o = std::find_if(objects.begin(), objects.end(), [&](const auto& x) { return x.id == id; });
-    if (o == objects.end()) continue;
-    const std::vector<int> stale = changes_.StaleLinesOf(id, slam.in_saved_map() ? slam.lines() : slam.map_lines());
-    line_removals_.insert(line_removals_.end(), stale.begin(), stale.end());
-    modeler_.NoteMoved(id, o->box);
-    reason_ += "; object " + std::to_string(id) + " is not where it was";
-  }
+  for (int id : moved) ObjectMoved(id);
+}
+
+void Mission::ObjectMoved(int id) {
+  const auto& objects = modeler_.model().objects;
+  const auto o = std::find_if(objects.begin(), objects.end(), [&](const auto& x) { return x.id == id; });
+  if (o == objects.end()) return;
+  changes_.Reported(id);
+  // All its sides leave the map, also one the SLAM matched again: moved along
+  // one of its sides, that side's new place is collinear with the old and
+  // the SLAM extends the old line over both (the piece then modelled too long).
+  line_removals_.insert(line_removals_.end(), o->lines.begin(), o->lines.end());
+  modeler_.NoteMoved(id, o->box);
+  reason_ += "; object " + std::to_string(id) + " is not where it was";
 }
 
 void Mission::LinesRemoved(const slam::Slam& slam) { modeler_.Update(slam.map_lines(), slam.map_trajectory()); }
@@ -293,7 +299,12 @@ void Mission::Adopted(double t, const slam::Slam& slam) {
 }
 
 bool Mission::CheckAgreement(double t, const slam::Slam& slam, const RangeScan& scan) {
-  if (!checking_ || agreement_.Step(slam, scan)) return true;
+  if (!checking_) return true;
+  if (agreement_.Step(slam, scan, modeler_.model())) {
+    // Its old sides' rays found nothing while the rest of the map agreed.
+    for (int id : agreement_.TakeMoved()) ObjectMoved(id);
+    return true;
+  }
   const auto pct = [](double v) { return std::to_string(static_cast<int>(std::lround(100 * v))); };
   const std::string why = "the map disagrees (" + pct(agreement_.agreement()) + " % of recent lines matched, " +
                           pct(agreement_.scan_agreement()) + " % of IR rays)";
@@ -372,9 +383,11 @@ void Mission::RestoreMapOnEnd() {
 }
 
 bool Mission::Watchdogs(double t, const slam::Slam& slam) {
-  // (Relocalising again while cleaning counts as cleaning: its own time limit.)
+  // (Relocalising again while cleaning, and modelling a moved piece after it,
+  // count as cleaning: its own time limit.)
   const bool cleaning = state_ == MissionState::kClean || state_ == MissionState::kReturnHome ||
-                        (state_ == MissionState::kRelocalize && after_reloc_ != MissionState::kModel);
+                        (state_ == MissionState::kRelocalize && after_reloc_ != MissionState::kModel) ||
+                        remodel_after_clean_;
   if (cleaning ? t - clean_started_ > options_.cleaning.max_time_s
                : t - started_at_ > options_.max_time_s) {
     if (cleaning) clean_.SetState(CleanState::kStopped, t, slam.distance_m());
@@ -584,6 +597,10 @@ WheelCommand Mission::StepContour(double t, double dt, const slam::Slam& slam,
 WheelCommand Mission::Finish(double t, const slam::Slam& slam, const EnvironmentModel& m,
                              std::string reason) {
   if (!clean_mode_) return To(MissionState::kDone, t, std::move(reason));
+  if (remodel_after_clean_) {
+    remodel_after_clean_ = false;
+    return ReturnHome(t, clean_summary_ + "; " + reason + "; returning home");
+  }
   // Plan the coverage once, bounded by the room's size, a piece per period
   // (StepClean), and clean. A cleaning stopped before (not finished) goes on
   // with the cells it left.
@@ -620,10 +637,22 @@ WheelCommand Mission::StepClean(double t, double dt, const slam::Slam& slam,
   };
   clean_summary_ = "cleaned " + std::to_string(p.cells_done) + " of " + std::to_string(p.cells_total) +
                    " cells, " + one_decimal(p.covered_m2) + " of " + one_decimal(p.total_m2) + " m2";
+  // A piece of the saved map found moved: the model is made whole again (go
+  // to P1, contour follow: paper §5) before going home, so that the map saved
+  // at the end has the piece where it now stands.
+  if (checking_ && modeler_.moved_unplaced() &&
+      modeler_.Update(slam.map_lines(), slam.map_trajectory()).pending() > 0) {
+    remodel_after_clean_ = true;
+    return To(MissionState::kModel, t, clean_summary_ + "; modelling what moved");
+  }
+  return ReturnHome(t, clean_summary_ + "; returning home");
+}
+
+WheelCommand Mission::ReturnHome(double t, std::string reason) {
   home_planned_ = false;
   home_attempts_ = 0;
   home_retry_t_ = t;
-  return To(MissionState::kReturnHome, t, clean_summary_ + "; returning home");
+  return To(MissionState::kReturnHome, t, std::move(reason));
 }
 
 WheelCommand Mission::StepReturnHome(double t, double dt, const slam::Slam& slam,

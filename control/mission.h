@@ -277,11 +277,17 @@ class Mission {
   // Watches the saved furniture for moves (after a commit or a known start).
   void WatchChanges(const slam::Slam& slam, const std::vector<TimedPose>& trajectory);
   void StepChanges(const slam::Slam& slam);
+  // Object `id` of the map is not where it was: its lines leave the map
+  // and the modeller is told (map_changes.h, or the IR check in relocalize.h).
+  void ObjectMoved(int id);
+  // Cleaning is over (or the modelling after it): home.
+  WheelCommand ReturnHome(double t, std::string reason);
   std::optional<CleaningProgress> resume_cleaning_;  // the next cleaning resumes this
   Pose2 local_to_map_;          // of the last commit
   bool home_in_local_ = false;  // home_ was taken in a relocalisation's local frame
   bool give_up_after_adoption_ = false;  // the adoption restores the map; then idle
   std::string clean_summary_;
+  bool remodel_after_clean_ = false;  // cleaned; modelling a moved piece before going home
   double last_distance_ = 0;  // travelled, at the last step
 };
 

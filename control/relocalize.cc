@@ -25,6 +25,14 @@ options::Table<RelocalizeOptions> RelocalizeKeys() {
       {"scan_rays", &O::scan_rays, 10, 100000, "", "... over this many recent judged rays"},
       {"scan_max_disagree", &O::scan_max_disagree, 0, 1, "",
        "... of which a larger share disagreeing means the map disagrees (relocalise again)"},
+      {"moved_share", &O::moved_share, 0, 1, "",
+       "... unless this share of the disagreeing rays is one object's finding nothing: its rays set aside"},
+      {"moved_confirm_rays", &O::moved_confirm_rays, 1, 100000, "",
+       "... and it is reported moved once this many more rays are judged ..."},
+      {"moved_confirm_agree", &O::moved_confirm_agree, 0, 1, "",
+       "... this share of them agreeing (fewer: the map disagrees)"},
+      {"moved_confirm_s", &O::moved_confirm_s, 1, 3600, "s",
+       "... within this time (or the map disagrees)"},
   };
   return kKeys;
 }
@@ -56,6 +64,10 @@ void MapAgreement::Reset(const slam::Slam& slam) {
   rays_agreeing_ = 0;
   scan_agreement_ = 1;
   last_scan_t_ = -1;
+  set_aside_.clear();
+  suspect_ = 0;
+  probation_rays_ = probation_agreeing_ = 0;
+  moved_.clear();
   windows_.clear();
   checkpoints_.clear();
   checkpoints_.push_back({slam.map_lines(), slam.map_trajectory()});
@@ -75,9 +87,19 @@ std::optional<double> RayHit(const Eigen::Vector2d& o, const Eigen::Vector2d& d,
   if (t <= 0 || u < 0 || u > 1) return std::nullopt;
   return t;
 }
+
+
+// The object of `model` whose side line `id` is (0: none, a wall).
+int ObjectOfLine(const EnvironmentModel& model, int id) {
+  for (const auto& o : model.objects) {
+    if (std::find(o.lines.begin(), o.lines.end(), id) != o.lines.end()) return o.id;
+  }
+  return 0;
+}
+
 }  // namespace
 
-bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan) {
+bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan, const EnvironmentModel& model) {
   if (scan.t == last_scan_t_) return true;
   last_scan_t_ = scan.t;
   const Pose2 me = slam.pose();  // internal frame, as the lines
@@ -85,31 +107,80 @@ bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan) {
     const Pose2 ray = Compose(me, {mounts_[i].x, mounts_[i].y, mounts_[i].theta});
     const Eigen::Vector2d o(ray.x, ray.y), d(std::cos(ray.theta), std::sin(ray.theta));
     double expected = options_.scan_max_m;
-    bool wall = false;
+    int line = 0;
     for (const auto& l : slam.lines()) {
       const auto hit = RayHit(o, d, l.p0, l.p1);
       if (hit && *hit < expected) {
         expected = *hit;
-        wall = true;
+        line = l.id;
       }
     }
-    if (!wall || expected < options_.scan_min_m) continue;
+    if (line == 0 || expected < options_.scan_min_m) continue;
+    const int object = ObjectOfLine(model, line);
+    if (object != 0 && std::find(set_aside_.begin(), set_aside_.end(), object) != set_aside_.end()) continue;
     const auto& m = scan.range_m[i];
-    const bool agrees = m && std::abs(*m - expected) <= options_.scan_tolerance_m;
-    rays_.push_back(agrees);
-    rays_agreeing_ += agrees;
+    Ray r;
+    r.agrees = m && std::abs(*m - expected) <= options_.scan_tolerance_m;
+    r.absent = !r.agrees && (!m || *m > expected);
+    r.object = object;
+    rays_.push_back(r);
+    rays_agreeing_ += r.agrees;
+    probation_rays_ += 1;
+    probation_agreeing_ += r.agrees;
     if (static_cast<int>(rays_.size()) > options_.scan_rays) {
-      rays_agreeing_ -= rays_.front();
+      rays_agreeing_ -= rays_.front().agrees;
       rays_.pop_front();
     }
   }
+  if (!Probation(scan.t)) return false;
   if (static_cast<int>(rays_.size()) < options_.scan_rays) return true;
   scan_agreement_ = static_cast<double>(rays_agreeing_) / static_cast<double>(rays_.size());
-  return 1 - scan_agreement_ <= options_.scan_max_disagree;
+  if (1 - scan_agreement_ <= options_.scan_max_disagree) return true;
+  return SetAsideAbsentObject(scan.t);
 }
 
-bool MapAgreement::Step(const slam::Slam& slam, const RangeScan& scan) {
-  if (!JudgeScan(slam, scan)) return false;
+bool MapAgreement::Probation(double t) {
+  if (suspect_ == 0) return true;
+  if (probation_rays_ >= options_.moved_confirm_rays) {
+    if (probation_agreeing_ < options_.moved_confirm_agree * probation_rays_) return false;
+    moved_.push_back(std::exchange(suspect_, 0));
+    return true;
+  }
+  return t - set_aside_t_ <= options_.moved_confirm_s;
+}
+
+bool MapAgreement::SetAsideAbsentObject(double t) {
+  // One at a time: a second disagreement on probation is the map's.
+  if (suspect_ != 0) return false;
+  std::vector<std::pair<int, int>> absent;  // object, its rays finding nothing
+  int disagreeing = 0;
+  for (const Ray& r : rays_) {
+    disagreeing += !r.agrees;
+    if (!r.absent || r.object == 0) continue;
+    auto it = std::find_if(absent.begin(), absent.end(), [&](const auto& a) { return a.first == r.object; });
+    if (it == absent.end()) {
+      absent.emplace_back(r.object, 1);
+    } else {
+      ++it->second;
+    }
+  }
+  if (absent.empty()) return false;
+  const auto most =
+      std::max_element(absent.begin(), absent.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  if (most->second < options_.moved_share * disagreeing) return false;
+  const int object = most->first;
+  rays_.erase(std::remove_if(rays_.begin(), rays_.end(), [&](const Ray& r) { return r.object == object; }),
+              rays_.end());
+  rays_agreeing_ = static_cast<int>(std::count_if(rays_.begin(), rays_.end(), [](const Ray& r) { return r.agrees; }));
+  set_aside_.push_back(object);
+  suspect_ = object;
+  set_aside_t_ = t;
+  probation_rays_ = probation_agreeing_ = 0;
+  return true;
+}
+
+bool MapAgreement::Step(const slam::Slam& slam, const RangeScan& scan, const EnvironmentModel& model) {
+  if (!JudgeScan(slam, scan, model)) return false;
   const slam::SlamStats& s = slam.stats();
   if (s.windows == last_.windows) return true;
   // Association outcome of the windows closed since the last call: matched
@@ -137,7 +208,9 @@ bool MapAgreement::Step(const slam::Slam& slam, const RangeScan& scan) {
   agreement_ = total >= options_.min_lines_judged ? static_cast<double>(matched) / total : 1.0;
   if (agreement_ < options_.min_agreement) return false;
   // Healthy: this window's map becomes a checkpoint; the oldest kept is from
-  // check_windows windows ago (what a relocalisation falls back to).
+  // check_windows windows ago (what a relocalisation falls back to). Not on
+  // probation: the map may be wrong then.
+  if (suspect_ != 0) return true;
   checkpoints_.push_back({slam.map_lines(), slam.map_trajectory()});
   while (checkpoints_.size() > keep + 1) checkpoints_.pop_front();
   return true;

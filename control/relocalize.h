@@ -25,9 +25,11 @@
 #include <array>
 #include <deque>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "control/map_changes.h"
+#include "control/room_model.h"
 #include "slam/relocalizer.h"
 #include "slam/slam.h"
 #include "types/geometry.h"
@@ -55,6 +57,19 @@ struct RelocalizeOptions {
   double scan_tolerance_m = 0.15;
   int scan_rays = 150;
   double scan_max_disagree = 0.7;
+  // A moved piece of furniture (issue 14) makes the rays that expect its old
+  // sides find nothing there: when the window disagrees and at least
+  // moved_share of its disagreeing rays are one saved object's rays finding
+  // nothing, that object's rays are set aside (no longer judged) instead of
+  // relocalising, and the map is put on probation: once moved_confirm_rays
+  // more rays are judged, at least moved_confirm_agree of them agreeing, the
+  // object is reported moved; fewer agreeing, or not that many rays within
+  // moved_confirm_s, and the map disagrees as before (a kidnap next to a
+  // piece of furniture looks the same at first), the object untouched.
+  double moved_share = 0.8;
+  int moved_confirm_rays = 150;
+  double moved_confirm_agree = 0.7;
+  double moved_confirm_s = 12;
   MapChangeOptions changes;        // moved furniture (map_changes.h)
 };
 options::Table<RelocalizeOptions> RelocalizeKeys();  // [relocalize], beside slam::RelocalizeKeys()
@@ -102,7 +117,10 @@ class MapAgreement {
   // Committed: judging starts now (the SLAM has adopted the saved map).
   void Reset(const slam::Slam& slam);
   // After each control period: false when the map disagrees (see above).
-  bool Step(const slam::Slam& slam, const RangeScan& scan);
+  // `model`: the map's objects (which line a ray expects, and whose it is).
+  bool Step(const slam::Slam& slam, const RangeScan& scan, const EnvironmentModel& model);
+  // Objects whose rays were set aside and then confirmed moved (each once).
+  std::vector<int> TakeMoved() { return std::exchange(moved_, {}); }
   // The map as it was check_windows windows ago (map frame), to relocalise in.
   const SavedLines& checkpoint() const { return checkpoints_.front(); }
   // Matched share over the judged windows (1 while too few lines).
@@ -115,14 +133,30 @@ class MapAgreement {
     int matched = 0;
     int unexplained = 0;
   };
+  struct Ray {
+    bool agrees = false;
+    bool absent = false;  // disagrees: nothing at (or short of) the expected range
+    int object = 0;       // the object whose line it expects (0: a wall)
+  };
   // The scan judged against the map (false: the map disagrees).
-  bool JudgeScan(const slam::Slam& slam, const RangeScan& scan);
+  bool JudgeScan(const slam::Slam& slam, const RangeScan& scan, const EnvironmentModel& model);
+  // The window disagrees: mostly one object's "nothing there" rays? Then its
+  // rays are set aside (true).
+  bool SetAsideAbsentObject(double t);
+  // While an object is set aside: false once the map disagrees after all.
+  bool Probation(double t);
 
   RelocalizeOptions options_;
   std::array<SensorMount, kNumIrSensors> mounts_;
   double last_scan_t_ = -1;
-  std::deque<bool> rays_;  // judged rays, true: agrees
+  std::deque<Ray> rays_;  // judged rays
   int rays_agreeing_ = 0;
+  std::vector<int> set_aside_;  // objects whose rays are no longer judged
+  int suspect_ = 0;             // set aside, not yet reported moved
+  double set_aside_t_ = 0;
+  int probation_rays_ = 0;      // judged since the set-aside ...
+  int probation_agreeing_ = 0;  // ... and agreeing
+  std::vector<int> moved_;
   double scan_agreement_ = 1;
   slam::SlamStats last_;
   std::deque<Window> windows_;

@@ -82,6 +82,7 @@ void Modeler::Seed(const EnvironmentModel& saved, std::vector<TimedPose> saved_t
   seeded_ = true;
   saved_ids_.clear();
   moved_.clear();
+  new_ids_.clear();
   notes_.clear();
   for (const auto& o : saved.objects) saved_ids_.push_back(o.id);
   prior_trajectory_ = std::move(saved_trajectory);
@@ -286,28 +287,51 @@ ObjectModel BuildObject(const std::vector<Side>& sides, const std::vector<size_t
 
 void Modeler::NameNewObject(ObjectModel* obj) {
   // Not in the saved map: a piece that moved (about the same size), or a new one.
+  if (TakeMoved(obj)) return;
+  notes_.emplace_back(obj->id, "new since the saved map");
+  new_ids_.push_back(obj->id);
+}
+
+bool Modeler::TakeMoved(ObjectModel* obj) {
+  // Centre of box a from box b's.
+  const auto shift = [](const Box& a, const Box& b) {
+    return Eigen::Vector2d(0.5 * (a.xmin + a.xmax - b.xmin - b.xmax), 0.5 * (a.ymin + a.ymax - b.ymin - b.ymax));
+  };
   const auto same = std::find_if(moved_.begin(), moved_.end(), [&](const auto& mv) {
     const Box& b = mv.second;
     const bool upright = std::abs(b.width() - obj->box.width()) <= options_.same_size_m &&
                          std::abs(b.height() - obj->box.height()) <= options_.same_size_m;
     const bool turned = std::abs(b.width() - obj->box.height()) <= options_.same_size_m &&
                         std::abs(b.height() - obj->box.width()) <= options_.same_size_m;
-    return upright || turned;
+    // Where it was (its lines not out of the map yet): not the piece found again.
+    return (upright || turned) && shift(obj->box, b).norm() > options_.same_size_m;
   });
-  std::string note;
-  if (same != moved_.end()) {
-    obj->id = same->first;
-    const Box& b = same->second;
-    const double dx = 0.5 * (obj->box.xmin + obj->box.xmax - b.xmin - b.xmax);
-    const double dy = 0.5 * (obj->box.ymin + obj->box.ymax - b.ymin - b.ymax);
-    const auto cm = [](double v) { return std::to_string(static_cast<int>(std::lround(100 * v))); };
-    note = "moved since the saved map by " + cm(std::hypot(dx, dy)) + " cm (was at [" + cm(b.xmin) + ", " +
-           cm(b.ymin) + ", " + cm(b.xmax) + ", " + cm(b.ymax) + "] cm)";
-    moved_.erase(same);
-  } else {
-    note = "new since the saved map";
+  if (same == moved_.end()) return false;
+  obj->id = same->first;
+  const Box& b = same->second;
+  const auto cm = [](double v) { return std::to_string(static_cast<int>(std::lround(100 * v))); };
+  notes_.emplace_back(obj->id, "moved since the saved map by " + cm(shift(obj->box, b).norm()) + " cm (was at [" +
+                                   cm(b.xmin) + ", " + cm(b.ymin) + ", " + cm(b.xmax) + ", " + cm(b.ymax) +
+                                   "] cm)");
+  moved_.erase(same);
+  return true;
+}
+
+void Modeler::RenameNewAsMoved(ObjectModel* obj) {
+  // Modelled (as new) before the saved piece was found missing: once it is
+  // complete, and so has its true size, it may be that piece.
+  const auto fresh = std::find(new_ids_.begin(), new_ids_.end(), obj->id);
+  if (!obj->complete || moved_.empty() || fresh == new_ids_.end()) return;
+  const int was = obj->id;
+  if (!TakeMoved(obj)) return;
+  new_ids_.erase(fresh);
+  notes_.erase(std::remove_if(notes_.begin(), notes_.end(), [&](const auto& n) { return n.first == was; }),
+               notes_.end());
+  std::replace(closed_by_contour_.begin(), closed_by_contour_.end(), was, obj->id);
+  for (auto& g : given_up_) {
+    if (g.first == was) g.first = obj->id;
   }
-  notes_.emplace_back(obj->id, note);
+  obj->note = notes_.back().second;
 }
 
 void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop) {
@@ -353,6 +377,7 @@ void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_l
         obj.note = why;
       }
     }
+    if (seeded_) RenameNewAsMoved(&obj);
   }
 }
 

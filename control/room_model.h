@@ -89,17 +89,25 @@ class Modeler {
   // Object `id` of the saved map is not where it was (map_changes.h): the next
   // object found that is not in the saved map and has about its size (within
   // same_size_m) is taken to be it: it keeps its id, with a note saying where
-  // it was. Other objects not in the saved map are noted as new.
+  // it was; one modelled as new before this call is renamed so once it is
+  // complete. Other objects not in the saved map are noted as new.
   void NoteMoved(int id, const Box& was);
   // Marks an object as not completable (e.g. unreachable); it stays incomplete.
   void GiveUp(int object_id, const std::string& why);
   const EnvironmentModel& model() const { return model_; }
+  // A piece NoteMoved was told of has not been found again yet.
+  bool moved_unplaced() const { return !moved_.empty(); }
 
  private:
   // Gives the new model's objects the ids of the old ones they overlap most (new
   // ids otherwise), and applies closed contours and given-up notes.
   void AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop);
   void NameNewObject(ObjectModel* obj);
+  // The piece NoteMoved was told of that has obj's size: obj takes its id
+  // and a "moved" note (false: none).
+  bool TakeMoved(ObjectModel* obj);
+  // A complete object named new earlier that is a moved piece: renamed.
+  void RenameNewAsMoved(ObjectModel* obj);
 
   ModelOptions options_;
   EnvironmentModel model_;
@@ -111,6 +119,7 @@ class Modeler {
   bool seeded_ = false;
   std::vector<int> saved_ids_;                     // Seed's objects
   std::vector<std::pair<int, Box>> moved_;         // NoteMoved, not found again yet
+  std::vector<int> new_ids_;                       // objects named new since the saved map
   std::vector<std::pair<int, std::string>> notes_; // kept on the object while it is complete
 };
 

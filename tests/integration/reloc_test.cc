@@ -396,7 +396,7 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
 
 TEST(RelocTest, FurnitureMovedHalfAMetreIsDetectedAndKeepsItsId) {
   if (!std::getenv("RELOC_DEBUG")) GTEST_SKIP() << "an experiment (docs/relocalization.md)";
-  const sim::World world = testing::LoadTestWorld("fig14");
+  const sim::World world = testing::LoadTestWorld(std::getenv("RELOC_WORLD") ? std::getenv("RELOC_WORLD") : "fig14");
   const Made made = MakeMap(world, 1);
   for (const auto& o : world.objects)
     std::printf("world object [%.2f %.2f %.2f %.2f]\n", o.xmin, o.ymin, o.xmax, o.ymax);
