@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "control/path_planner.h"
 #include "control/room_geometry.h"
 #include "control/room_model.h"
@@ -196,6 +198,62 @@ TEST(RoomModelTest, TheCornerRule) {
   EXPECT_FALSE(MakeCorner(CornerEnd{0.12, false}, CornerEnd{0.5, false}, 0.35));
   // Within neither side's extent nor near an end of the other: no corner.
   EXPECT_FALSE(MakeCorner(CornerEnd{0.3, false}, CornerEnd{0.6, false}, 0.35));
+}
+
+// A free 0.6 x 0.6 box (sides shortened by 8 cm, as mapped) at x0, y0, ids from id.
+std::vector<slam::LineFeature> Box06(int id, double x0, double y0) {
+  const double x1 = x0 + 0.6, y1 = y0 + 0.6;
+  return {Line(id, x0, y0, x1 - 0.08, y0), Line(id + 1, x1, y0 + 0.08, x1, y1 - 0.08),
+          Line(id + 2, x1 - 0.08, y1, x0 + 0.08, y1), Line(id + 3, x0, y1 - 0.08, x0, y0 + 0.08)};
+}
+
+TEST(RoomModelTest, AMovedPieceModelledAsNewBeforeItWasFoundMissingTakesItsIdButNotAtItsOldPlace) {
+  // The saved map: one free box at (2.6, 2.6).
+  auto saved_lines = Room();
+  for (const auto& l : Box06(11, 2.6, 2.6)) saved_lines.push_back(l);
+  Modeler before{ModelOptions{}};
+  const EnvironmentModel saved = before.Update(saved_lines, Loop());
+  ASSERT_EQ(saved.objects.size(), 1u);
+  const ObjectModel piece = saved.objects[0];
+  ASSERT_TRUE(piece.complete);
+
+  // Today it stands 1.6 m to the left; mapped there (new lines 21-24) before
+  // the check finds its old sides missing: a new object.
+  Modeler m{ModelOptions{}};
+  m.Seed(saved, Loop());
+  auto lines = saved_lines;
+  for (const auto& l : Box06(21, 1.0, 2.6)) lines.push_back(l);
+  const EnvironmentModel& first = m.Update(lines, Loop());
+  ASSERT_EQ(first.objects.size(), 2u);
+  const auto at_new = [](const EnvironmentModel& model) {
+    return std::find_if(model.objects.begin(), model.objects.end(),
+                        [](const ObjectModel& o) { return o.box.xmin < 2; });
+  };
+  const int fresh = at_new(first)->id;
+  EXPECT_NE(fresh, piece.id);
+  EXPECT_EQ(at_new(first)->note, "new since the saved map");
+
+  // Found missing: its old sides are still in the map for this call (they
+  // leave it after), and the object they make is not taken for the piece.
+  m.NoteMoved(piece.id, piece.box);
+  EXPECT_TRUE(m.moved_unplaced());
+  const EnvironmentModel& second = m.Update(lines, Loop());
+  ASSERT_EQ(second.objects.size(), 2u);
+  EXPECT_EQ(at_new(second)->id, piece.id);
+  EXPECT_EQ(at_new(second)->note, "moved since the saved map by 160 cm (was at [260, 260, 320, 320] cm)");
+  for (const auto& o : second.objects) {
+    if (o.box.xmin > 2) EXPECT_EQ(o.note, "new since the saved map");
+  }
+  EXPECT_FALSE(m.moved_unplaced());
+
+  // The old sides out of the map: the piece keeps its id and its note.
+  auto after = Room();
+  for (const auto& l : Box06(21, 1.0, 2.6)) after.push_back(l);
+  const EnvironmentModel& third = m.Update(after, Loop());
+  ASSERT_EQ(third.objects.size(), 1u);
+  EXPECT_EQ(third.objects[0].id, piece.id);
+  EXPECT_TRUE(third.objects[0].complete);
+  EXPECT_EQ(third.objects[0].note.rfind("moved since the saved map by 160 cm", 0), 0u);
 }
 
 TEST(PathPlannerTest, LeavesATightSpotEvenFromWithinTheHardClearance) {

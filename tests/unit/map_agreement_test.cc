@@ -1,0 +1,136 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <optional>
+#include <vector>
+
+#include "control/relocalize.h"
+#include "slam/slam.h"
+
+namespace irslam::control {
+namespace {
+
+slam::LineFeature Line(int id, double x0, double y0, double x1, double y1) {
+  slam::LineFeature l;
+  l.id = id;
+  l.p0 = {x0, y0};
+  l.p1 = {x1, y1};
+  const Eigen::Vector2d d = (l.p1 - l.p0).normalized();
+  l.theta = std::atan2(d.x(), -d.y());
+  l.rho = l.p0.dot(Eigen::Vector2d(std::cos(l.theta), std::sin(l.theta)));
+  if (l.rho < 0) {
+    l.rho = -l.rho;
+    l.theta = NormalizeAngle(l.theta + M_PI);
+  }
+  return l;
+}
+
+// Sensors at the robot's centre: 0 looks right, 1 left, the others backwards.
+std::array<SensorMount, kNumIrSensors> Mounts() {
+  std::array<SensorMount, kNumIrSensors> m{};
+  m[0].theta = -M_PI / 2;
+  m[1].theta = M_PI / 2;
+  for (size_t i = 2; i < m.size(); ++i) m[i].theta = M_PI;
+  return m;
+}
+
+// The saved map: a wall along y = -0.5 and object 7's side along y = 3.5
+// (x 2..4). From (0, 0) only sensor 0 sees a mapped line (the wall, 0.5 m);
+// from (3, 3) only sensor 1 does (the object's side, 0.5 m).
+std::vector<slam::LineFeature> Map() { return {Line(1, -5, -0.5, 5, -0.5), Line(2, 2, 3.5, 4, 3.5)}; }
+
+EnvironmentModel Model() {
+  EnvironmentModel m;
+  ObjectModel o;
+  o.id = 7;
+  o.lines = {2};
+  m.objects.push_back(o);
+  return m;
+}
+
+slam::Slam At(const Pose2& where) {
+  slam::SlamOptions o;
+  o.mounts = Mounts();
+  slam::Slam s(o);
+  s.AdoptMap(where, Map());
+  return s;
+}
+
+RangeScan Scan(double t, std::optional<double> right, std::optional<double> left) {
+  RangeScan s;
+  s.t = t;
+  s.range_m[0] = right;
+  s.range_m[1] = left;
+  return s;
+}
+
+class MapAgreementTest : public ::testing::Test {
+ protected:
+  // 150 rays agreeing by the wall, then the robot beside the object, whose
+  // side is not there: the 106th ray finding nothing makes 106 of 150 (more
+  // than scan_max_disagree 0.7) disagree, all of them object 7's.
+  void SetUp() override {
+    agreement_.Reset(wall_);
+    for (int i = 0; i < 150; ++i) ASSERT_TRUE(agreement_.Step(wall_, Scan(Next(), 0.5, {}), model_));
+    for (int i = 0; i < 106; ++i) ASSERT_TRUE(agreement_.Step(object_, Scan(Next(), {}, {}), model_)) << i;
+    EXPECT_NEAR(agreement_.scan_agreement(), 44.0 / 150, 1e-9);
+  }
+  double Next(double dt = 0.1) { return t_ += dt; }
+
+  RelocalizeOptions options_;
+  slam::Slam wall_ = At({0, 0, 0});
+  slam::Slam object_ = At({3, 3, 0});
+  EnvironmentModel model_ = Model();
+  MapAgreement agreement_{options_, Mounts()};
+  double t_ = 0;
+};
+
+TEST_F(MapAgreementTest, OneObjectsRaysFindingNothingAreSetAsideAndItIsReportedMovedOnceTheRestAgrees) {
+  // Its rays are no longer judged: beside it nothing disagrees.
+  for (int i = 0; i < 20; ++i) EXPECT_TRUE(agreement_.Step(object_, Scan(Next(), {}, {}), model_));
+  // On probation: reported once moved_confirm_rays (150) more rays agree
+  // within moved_confirm_s (12 s; here 2 + 7.5 s).
+  for (int i = 0; i < 149; ++i) {
+    ASSERT_TRUE(agreement_.Step(wall_, Scan(Next(0.05), 0.5, {}), model_));
+    ASSERT_TRUE(agreement_.TakeMoved().empty()) << i;
+  }
+  ASSERT_TRUE(agreement_.Step(wall_, Scan(Next(0.05), 0.52, {}), model_));
+  EXPECT_EQ(agreement_.TakeMoved(), std::vector<int>({7}));
+  EXPECT_TRUE(agreement_.TakeMoved().empty());  // once
+}
+
+TEST_F(MapAgreementTest, WhenTheRestDisagreesOnProbationTheMapDisagreesAndNothingIsReportedMoved) {
+  // A kidnap beside a piece of furniture looks like it at first; then the
+  // walls find nothing either.
+  bool disagreed = false;
+  for (int i = 0; i < 150 && !disagreed; ++i) disagreed = !agreement_.Step(wall_, Scan(Next(), {}, {}), model_);
+  EXPECT_TRUE(disagreed);
+  EXPECT_TRUE(agreement_.TakeMoved().empty());
+}
+
+TEST_F(MapAgreementTest, ProbationWithoutEnoughRaysEndsInDisagreementAfterItsTime) {
+  // Nothing judged (the object's rays set aside): moved_confirm_s (12 s) later the map disagrees.
+  const double set_aside = t_;
+  double disagreed_at = -1;
+  for (int i = 0; i < 200 && disagreed_at < 0; ++i) {
+    if (!agreement_.Step(object_, Scan(Next(), {}, {}), model_)) disagreed_at = t_;
+  }
+  EXPECT_NEAR(disagreed_at - set_aside, options_.moved_confirm_s, 0.15);
+  EXPECT_TRUE(agreement_.TakeMoved().empty());
+}
+
+TEST(MapAgreementWallTest, AWallsRaysFindingNothingAreNotSetAside) {
+  RelocalizeOptions options;
+  const slam::Slam wall = At({0, 0, 0});
+  const EnvironmentModel model = Model();
+  MapAgreement agreement(options, Mounts());
+  agreement.Reset(wall);
+  double t = 0;
+  for (int i = 0; i < 150; ++i) ASSERT_TRUE(agreement.Step(wall, Scan(t += 0.1, 0.5, {}), model));
+  int agreeing_steps = 0;
+  while (agreement.Step(wall, Scan(t += 0.1, {}, {}), model)) ++agreeing_steps;
+  EXPECT_EQ(agreeing_steps, 105);  // the 106th ray finding nothing: the map disagrees
+}
+
+}  // namespace
+}  // namespace irslam::control
