@@ -64,7 +64,6 @@ void MapAgreement::Reset(const slam::Slam& slam) {
   rays_agreeing_ = 0;
   scan_agreement_ = 1;
   last_scan_t_ = -1;
-  set_aside_.clear();
   suspect_ = 0;
   probation_rays_ = probation_agreeing_ = 0;
   moved_.clear();
@@ -87,7 +86,6 @@ std::optional<double> RayHit(const Eigen::Vector2d& o, const Eigen::Vector2d& d,
   if (t <= 0 || u < 0 || u > 1) return std::nullopt;
   return t;
 }
-
 
 // The object of `model` whose side line `id` is (0: none, a wall).
 int ObjectOfLine(const EnvironmentModel& model, int id) {
@@ -117,7 +115,7 @@ bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan, cons
     }
     if (line == 0 || expected < options_.scan_min_m) continue;
     const int object = ObjectOfLine(model, line);
-    if (object != 0 && std::find(set_aside_.begin(), set_aside_.end(), object) != set_aside_.end()) continue;
+    if (object != 0 && object == suspect_) continue;  // set aside
     const auto& m = scan.range_m[i];
     Ray r;
     r.agrees = m && std::abs(*m - expected) <= options_.scan_tolerance_m;
@@ -125,8 +123,10 @@ bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan, cons
     r.object = object;
     rays_.push_back(r);
     rays_agreeing_ += r.agrees;
-    probation_rays_ += 1;
-    probation_agreeing_ += r.agrees;
+    if (suspect_ != 0) {
+      ++probation_rays_;
+      probation_agreeing_ += r.agrees;
+    }
     if (static_cast<int>(rays_.size()) > options_.scan_rays) {
       rays_agreeing_ -= rays_.front().agrees;
       rays_.pop_front();
@@ -143,6 +143,7 @@ bool MapAgreement::Probation(double t) {
   if (suspect_ == 0) return true;
   if (probation_rays_ >= options_.moved_confirm_rays) {
     if (probation_agreeing_ < options_.moved_confirm_agree * probation_rays_) return false;
+    // Its lines leave the map (Mission::ObjectMoved): nothing to set aside.
     moved_.push_back(std::exchange(suspect_, 0));
     return true;
   }
@@ -172,7 +173,6 @@ bool MapAgreement::SetAsideAbsentObject(double t) {
   rays_.erase(std::remove_if(rays_.begin(), rays_.end(), [&](const Ray& r) { return r.object == object; }),
               rays_.end());
   rays_agreeing_ = static_cast<int>(std::count_if(rays_.begin(), rays_.end(), [](const Ray& r) { return r.agrees; }));
-  set_aside_.push_back(object);
   suspect_ = object;
   set_aside_t_ = t;
   probation_rays_ = probation_agreeing_ = 0;

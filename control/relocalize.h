@@ -151,8 +151,7 @@ class MapAgreement {
   double last_scan_t_ = -1;
   std::deque<Ray> rays_;  // judged rays
   int rays_agreeing_ = 0;
-  std::vector<int> set_aside_;  // objects whose rays are no longer judged
-  int suspect_ = 0;             // set aside, not yet reported moved
+  int suspect_ = 0;             // the object whose rays are set aside (0: none)
   double set_aside_t_ = 0;
   int probation_rays_ = 0;      // judged since the set-aside ...
   int probation_agreeing_ = 0;  // ... and agreeing
