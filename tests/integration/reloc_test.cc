@@ -417,7 +417,9 @@ TEST(RelocTest, FurnitureMovedHalfAMetreIsFoundMovedAndModelledAtItsNewPlace) {
       EXPECT_GE(r.moved.world_index, 0) << name << " seed " << r.seed;
       here += r.moved.updated;
       // An updated model is noted as moved: the piece kept its id.
-      if (r.moved.updated) EXPECT_TRUE(r.moved.noted) << name << " seed " << r.seed;
+      if (r.moved.updated) {
+        EXPECT_TRUE(r.moved.noted) << name << " seed " << r.seed;
+      }
     }
     std::printf("%s: model updated in %d of %zu runs\n", name, here, w.runs.size());
     updated += here;

@@ -242,7 +242,9 @@ TEST(RoomModelTest, AMovedPieceModelledAsNewBeforeItWasFoundMissingTakesItsIdBut
   EXPECT_EQ(at_new(second)->id, piece.id);
   EXPECT_EQ(at_new(second)->note, "moved since the saved map by 160 cm (was at [260, 260, 320, 320] cm)");
   for (const auto& o : second.objects) {
-    if (o.box.xmin > 2) EXPECT_EQ(o.note, "new since the saved map");
+    if (o.box.xmin > 2) {
+      EXPECT_EQ(o.note, "new since the saved map");
+    }
   }
   EXPECT_FALSE(m.moved_unplaced());
 
