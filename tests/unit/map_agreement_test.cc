@@ -6,24 +6,12 @@
 
 #include "control/relocalize.h"
 #include "slam/slam.h"
+#include "tests/testing/lines.h"
 
 namespace irslam::control {
 namespace {
 
-slam::LineFeature Line(int id, double x0, double y0, double x1, double y1) {
-  slam::LineFeature l;
-  l.id = id;
-  l.p0 = {x0, y0};
-  l.p1 = {x1, y1};
-  const Eigen::Vector2d d = (l.p1 - l.p0).normalized();
-  l.theta = std::atan2(d.x(), -d.y());
-  l.rho = l.p0.dot(Eigen::Vector2d(std::cos(l.theta), std::sin(l.theta)));
-  if (l.rho < 0) {
-    l.rho = -l.rho;
-    l.theta = NormalizeAngle(l.theta + M_PI);
-  }
-  return l;
-}
+using testing::Line;
 
 // Sensors at the robot's centre: 0 looks right, 1 left, the others backwards.
 std::array<SensorMount, kNumIrSensors> Mounts() {

@@ -5,24 +5,12 @@
 #include "control/path_planner.h"
 #include "control/room_geometry.h"
 #include "control/room_model.h"
+#include "tests/testing/lines.h"
 
 namespace irslam::control {
 namespace {
 
-slam::LineFeature Line(int id, double x0, double y0, double x1, double y1) {
-  slam::LineFeature l;
-  l.id = id;
-  l.p0 = {x0, y0};
-  l.p1 = {x1, y1};
-  const Eigen::Vector2d d = (l.p1 - l.p0).normalized();
-  l.theta = std::atan2(d.x(), -d.y());  // normal = d rotated by -90 deg
-  l.rho = l.p0.dot(Eigen::Vector2d(std::cos(l.theta), std::sin(l.theta)));
-  if (l.rho < 0) {
-    l.rho = -l.rho;
-    l.theta = NormalizeAngle(l.theta + M_PI);
-  }
-  return l;
-}
+using testing::Line;
 
 // A 4 x 4 room walked at 0.4 m from its walls (the trajectory tells which side
 // each line was seen from).
