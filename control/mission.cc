@@ -126,6 +126,7 @@ void Mission::Reset(double t) {
   reloc_.End();
   changes_.Clear();
   line_removals_.clear();
+  checked_model_ = {};
   resume_cleaning_.reset();
   remodel_after_clean_ = false;
 }
@@ -138,20 +139,24 @@ void Mission::StepChanges(const slam::Slam& slam) {
   // (In a saved map the SLAM's frame is the map's: its lines need no copy.)
   const std::vector<int> moved = slam.in_saved_map() ? changes_.Step(slam.map_pose(), slam.lines())
                                                      : changes_.Step(slam.map_pose(), slam.map_lines());
-  for (int id : moved) ObjectMoved(id);
+  for (int id : moved) {
+    const auto& objects = modeler_.model().objects;
+    const auto o = std::find_if(objects.begin(), objects.end(), [&](const auto& x) { return x.id == id; });
+    if (o != objects.end()) ObjectMoved(ObjectModel(*o));
+  }
 }
 
-void Mission::ObjectMoved(int id) {
-  const auto& objects = modeler_.model().objects;
-  const auto o = std::find_if(objects.begin(), objects.end(), [&](const auto& x) { return x.id == id; });
-  if (o == objects.end()) return;
-  changes_.Reported(id);
+void Mission::ObjectMoved(const ObjectModel& o) {
+  changes_.Reported(o.id);
   // All its sides leave the map, also one the SLAM matched again: moved along
   // one of its sides, that side's new place is collinear with the old and
   // the SLAM extends the old line over both (the piece then modelled too long).
-  line_removals_.insert(line_removals_.end(), o->lines.begin(), o->lines.end());
-  modeler_.NoteMoved(id, o->box);
-  reason_ += "; object " + std::to_string(id) + " is not where it was";
+  line_removals_.insert(line_removals_.end(), o.lines.begin(), o.lines.end());
+  auto& checked = checked_model_.objects;
+  checked.erase(std::remove_if(checked.begin(), checked.end(), [&](const auto& x) { return x.id == o.id; }),
+                checked.end());
+  modeler_.NoteMoved(o.id, o.box);
+  reason_ += "; object " + std::to_string(o.id) + " is not where it was";
 }
 
 void Mission::LinesRemoved(const slam::Slam& slam) { modeler_.Update(slam.map_lines(), slam.map_trajectory()); }
@@ -168,6 +173,7 @@ bool Mission::StartInMap(double t, SavedMission saved, std::string* why) {
   Reset(t);
   resume_cleaning_ = std::move(saved.cleaning);
   modeler_.Seed(saved.model, saved.map.trajectory);
+  checked_model_ = saved.model;
   survey_.Exhaust();  // the saved mission surveyed the room already
   reloc_.Begin(t, std::move(saved.map));
   reloc_ran_ = true;
@@ -186,7 +192,8 @@ bool Mission::StartKnown(double t, const slam::Slam& slam, std::string* why) {
   if (clean_.active()) before = clean_.progress();
   Reset(t);
   resume_cleaning_ = std::move(before);
-  agreement_.Reset(slam);
+  checked_model_ = modeler_.model();
+  agreement_.Reset(slam, checked_model_);
   checking_ = true;
   WatchChanges(slam, slam.map_trajectory());
   survey_.Exhaust();  // the room was surveyed when it was modelled
@@ -271,7 +278,7 @@ void Mission::Adopted(double t, const slam::Slam& slam) {
   bumps_.TransformSince(reloc_bumps_from_, local_to_map_);
   if (reloc_progress_.attempts == 1) WatchChanges(slam, reloc_.map().trajectory);
   reloc_.End();
-  agreement_.Reset(slam);
+  agreement_.Reset(slam, checked_model_);
   checking_ = true;
   if (give_up_after_adoption_) {
     give_up_after_adoption_ = false;
@@ -300,9 +307,9 @@ void Mission::Adopted(double t, const slam::Slam& slam) {
 
 bool Mission::CheckAgreement(double t, const slam::Slam& slam, const RangeScan& scan) {
   if (!checking_) return true;
-  if (agreement_.Step(slam, scan, modeler_.model())) {
+  if (agreement_.Step(slam, scan)) {
     // Its old sides' rays found nothing while the rest of the map agreed.
-    for (int id : agreement_.TakeMoved()) ObjectMoved(id);
+    for (const ObjectModel& o : agreement_.TakeMoved()) ObjectMoved(o);
     return true;
   }
   const auto pct = [](double v) { return std::to_string(static_cast<int>(std::lround(100 * v))); };

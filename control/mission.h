@@ -274,12 +274,19 @@ class Mission {
   size_t reloc_bumps_from_ = 0;  // bumps recorded while relocalising (local frame) from here
   MapChanges changes_;
   std::vector<int> line_removals_;
+  // The objects the IR check (agreement_) attributes rays to: the saved
+  // map's (or, continuing in the live map, the model's at the start), less
+  // those found moved. Kept across relocalisations: by then the modeller may
+  // have grouped a side the SLAM stretched over a moved piece's new place
+  // with the new piece.
+  EnvironmentModel checked_model_;
   // Watches the saved furniture for moves (after a commit or a known start).
   void WatchChanges(const slam::Slam& slam, const std::vector<TimedPose>& trajectory);
   void StepChanges(const slam::Slam& slam);
-  // Object `id` of the map is not where it was: its lines leave the map
-  // and the modeller is told (map_changes.h, or the IR check in relocalize.h).
-  void ObjectMoved(int id);
+  // Object `o` of the map (id, sides, box) is not where it was: its sides
+  // leave the map and the modeller is told (map_changes.h, or the IR check in
+  // relocalize.h, which gives the object as it was set aside).
+  void ObjectMoved(const ObjectModel& o);
   // Cleaning is over (or the modelling after it): home.
   WheelCommand ReturnHome(double t, std::string reason);
   std::optional<CleaningProgress> resume_cleaning_;  // the next cleaning resumes this

@@ -58,13 +58,14 @@ double Relocalize::best_score() const {
   return search_->hypotheses().front().score;
 }
 
-void MapAgreement::Reset(const slam::Slam& slam) {
+void MapAgreement::Reset(const slam::Slam& slam, const EnvironmentModel& model) {
+  objects_ = model.objects;
   last_ = slam.stats();
   rays_.clear();
   rays_agreeing_ = 0;
   scan_agreement_ = 1;
   last_scan_t_ = -1;
-  suspect_ = 0;
+  suspect_ = {};
   probation_rays_ = probation_agreeing_ = 0;
   moved_.clear();
   windows_.clear();
@@ -87,9 +88,9 @@ std::optional<double> RayHit(const Eigen::Vector2d& o, const Eigen::Vector2d& d,
   return t;
 }
 
-// The object of `model` whose side line `id` is (0: none, a wall).
-int ObjectOfLine(const EnvironmentModel& model, int id) {
-  for (const auto& o : model.objects) {
+// The object of `objects` whose side line `id` is (0: none, a wall).
+int ObjectOfLine(const std::vector<ObjectModel>& objects, int id) {
+  for (const auto& o : objects) {
     if (std::find(o.lines.begin(), o.lines.end(), id) != o.lines.end()) return o.id;
   }
   return 0;
@@ -97,7 +98,7 @@ int ObjectOfLine(const EnvironmentModel& model, int id) {
 
 }  // namespace
 
-bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan, const EnvironmentModel& model) {
+bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan) {
   if (scan.t == last_scan_t_) return true;
   last_scan_t_ = scan.t;
   const Pose2 me = slam.pose();  // internal frame, as the lines
@@ -114,8 +115,8 @@ bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan, cons
       }
     }
     if (line == 0 || expected < options_.scan_min_m) continue;
-    const int object = ObjectOfLine(model, line);
-    if (object != 0 && object == suspect_) continue;  // set aside
+    const int object = ObjectOfLine(objects_, line);
+    if (object != 0 && object == suspect_.id) continue;  // set aside
     const auto& m = scan.range_m[i];
     Ray r;
     r.agrees = m && std::abs(*m - expected) <= options_.scan_tolerance_m;
@@ -123,7 +124,7 @@ bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan, cons
     r.object = object;
     rays_.push_back(r);
     rays_agreeing_ += r.agrees;
-    if (suspect_ != 0) {
+    if (suspect_.id != 0) {
       ++probation_rays_;
       probation_agreeing_ += r.agrees;
     }
@@ -140,11 +141,13 @@ bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan, cons
 }
 
 bool MapAgreement::Probation(double t) {
-  if (suspect_ == 0) return true;
+  if (suspect_.id == 0) return true;
   if (probation_rays_ >= options_.moved_confirm_rays) {
     if (probation_agreeing_ < options_.moved_confirm_agree * probation_rays_) return false;
     // Its lines leave the map (Mission::ObjectMoved): nothing to set aside.
-    moved_.push_back(std::exchange(suspect_, 0));
+    objects_.erase(std::remove_if(objects_.begin(), objects_.end(), [&](const auto& o) { return o.id == suspect_.id; }),
+                   objects_.end());
+    moved_.push_back(std::exchange(suspect_, {}));
     return true;
   }
   return t - set_aside_t_ <= options_.moved_confirm_s;
@@ -152,7 +155,7 @@ bool MapAgreement::Probation(double t) {
 
 bool MapAgreement::SetAsideAbsentObject(double t) {
   // One at a time: a second disagreement on probation is the map's.
-  if (suspect_ != 0) return false;
+  if (suspect_.id != 0) return false;
   std::vector<std::pair<int, int>> absent;  // object, its rays finding nothing
   int disagreeing = 0;
   for (const Ray& r : rays_) {
@@ -170,17 +173,19 @@ bool MapAgreement::SetAsideAbsentObject(double t) {
       std::max_element(absent.begin(), absent.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
   if (most->second < options_.moved_share * disagreeing) return false;
   const int object = most->first;
+  const auto o = std::find_if(objects_.begin(), objects_.end(), [&](const auto& x) { return x.id == object; });
+  if (o == objects_.end()) return false;
   rays_.erase(std::remove_if(rays_.begin(), rays_.end(), [&](const Ray& r) { return r.object == object; }),
               rays_.end());
   rays_agreeing_ = static_cast<int>(std::count_if(rays_.begin(), rays_.end(), [](const Ray& r) { return r.agrees; }));
-  suspect_ = object;
+  suspect_ = *o;
   set_aside_t_ = t;
   probation_rays_ = probation_agreeing_ = 0;
   return true;
 }
 
-bool MapAgreement::Step(const slam::Slam& slam, const RangeScan& scan, const EnvironmentModel& model) {
-  if (!JudgeScan(slam, scan, model)) return false;
+bool MapAgreement::Step(const slam::Slam& slam, const RangeScan& scan) {
+  if (!JudgeScan(slam, scan)) return false;
   const slam::SlamStats& s = slam.stats();
   if (s.windows == last_.windows) return true;
   // Association outcome of the windows closed since the last call: matched
@@ -210,7 +215,7 @@ bool MapAgreement::Step(const slam::Slam& slam, const RangeScan& scan, const Env
   // Healthy: this window's map becomes a checkpoint; the oldest kept is from
   // check_windows windows ago (what a relocalisation falls back to). Not on
   // probation: the map may be wrong then.
-  if (suspect_ != 0) return true;
+  if (suspect_.id != 0) return true;
   checkpoints_.push_back({slam.map_lines(), slam.map_trajectory()});
   while (checkpoints_.size() > keep + 1) checkpoints_.pop_front();
   return true;

@@ -115,12 +115,19 @@ class MapAgreement {
       : options_(options), mounts_(mounts) {}
 
   // Committed: judging starts now (the SLAM has adopted the saved map).
-  void Reset(const slam::Slam& slam);
+  // `model`: the map's objects now; a ray expecting one of an object's sides
+  // is that object's for as long as the check runs, whatever the modeller
+  // makes of the side later (a side the SLAM stretched over a moved piece's
+  // new place is grouped with the new piece's sides, yet its rays still find
+  // nothing where the piece was).
+  void Reset(const slam::Slam& slam, const EnvironmentModel& model);
   // After each control period: false when the map disagrees (see above).
-  // `model`: the map's objects (which line a ray expects, and whose it is).
-  bool Step(const slam::Slam& slam, const RangeScan& scan, const EnvironmentModel& model);
-  // Objects whose rays were set aside and then confirmed moved (each once).
-  std::vector<int> TakeMoved() { return std::exchange(moved_, {}); }
+  bool Step(const slam::Slam& slam, const RangeScan& scan);
+  // Objects whose rays were set aside and then confirmed moved (each once), as
+  // the model had them when they were set aside (id, sides, box): the
+  // modeller may have regrouped those sides since (a side the SLAM stretched
+  // over the piece's new place joins the new piece's group).
+  std::vector<ObjectModel> TakeMoved() { return std::exchange(moved_, {}); }
   // The map as it was check_windows windows ago (map frame), to relocalise in.
   const SavedLines& checkpoint() const { return checkpoints_.front(); }
   // Matched share over the judged windows (1 while too few lines).
@@ -139,7 +146,7 @@ class MapAgreement {
     int object = 0;       // the object whose line it expects (0: a wall)
   };
   // The scan judged against the map (false: the map disagrees).
-  bool JudgeScan(const slam::Slam& slam, const RangeScan& scan, const EnvironmentModel& model);
+  bool JudgeScan(const slam::Slam& slam, const RangeScan& scan);
   // The window disagrees: mostly one object's "nothing there" rays? Then its
   // rays are set aside (true).
   bool SetAsideAbsentObject(double t);
@@ -149,13 +156,14 @@ class MapAgreement {
   RelocalizeOptions options_;
   std::array<SensorMount, kNumIrSensors> mounts_;
   double last_scan_t_ = -1;
+  std::vector<ObjectModel> objects_;  // Reset's model (less those found moved)
   std::deque<Ray> rays_;  // judged rays
   int rays_agreeing_ = 0;
-  int suspect_ = 0;             // the object whose rays are set aside (0: none)
+  ObjectModel suspect_;         // the object whose rays are set aside (id 0: none)
   double set_aside_t_ = 0;
   int probation_rays_ = 0;      // judged since the set-aside ...
   int probation_agreeing_ = 0;  // ... and agreeing
-  std::vector<int> moved_;
+  std::vector<ObjectModel> moved_;
   double scan_agreement_ = 1;
   slam::SlamStats last_;
   std::deque<Window> windows_;

@@ -368,7 +368,8 @@ void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_l
                                        obj.id) != closed_by_contour_.end();
     if (contoured && !obj.complete && obj.lines.size() >= 3) {
       obj.complete = true;
-      obj.note = "one side inferred from the contour";
+      // (After a note saying where it came from: "moved ..." stays first.)
+      obj.note = obj.note.empty() ? "one side inferred from the contour" : obj.note + "; one side inferred from the contour";
     }
     for (const auto& [gid, why] : given_up_) {
       if (gid == obj.id && !obj.complete) {

@@ -396,25 +396,29 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
 }
 
 // The moved-furniture measurement's fixed-seed subset (irslam-report --reloc 10
-// --reloc-move 0.5; docs/relocalization.md "Moved furniture"): fig14 and fig20,
-// 10 runs each, one piece moved 0.5 m, then a whole cleaning in the saved map.
-// Measured 8/10 and 7/10 models updated (3/20 before the IR check's probation,
-// the renaming and the modelling after cleaning); the floors keep the rate from
-// dropping. Every run must relocalise and none may commit wrong.
+// --reloc-worlds fig14,fig16,fig20 --reloc-move 0.5; docs/relocalization.md
+// "Moved furniture"): 10 runs each, one piece moved 0.5 m (fig16's two desks
+// each move whole), then a whole cleaning in the saved map. Measured 9, 5 and
+// 8 of 10 models updated (fig14 + fig20: 3/20 before the IR check's
+// probation, 15/20 before its rays were attributed to the saved objects); the
+// floor keeps the rate from dropping. No run may commit wrong; one fig16 run
+// (seed 11) does not relocalise within 180 s and explores afresh, as designed.
 TEST(RelocTest, FurnitureMovedHalfAMetreIsFoundMovedAndModelledAtItsNewPlace) {
   metrics::RelocOptions ro;
   ro.runs = 10;
   ro.move_m = 0.5;
   ro.max_time_s = 1500;
   const robot::CoreOptions options = robot::DefaultCoreOptions();
-  int updated = 0;
-  for (const char* name : {"fig14", "fig20"}) {
+  int updated = 0, correct = 0, runs = 0;
+  for (const char* name : {"fig14", "fig16", "fig20"}) {
     const metrics::RelocWorld w = metrics::EvaluateRelocalization(testing::LoadTestWorld(name), options, ro);
     ASSERT_TRUE(w.map_done) << name;
     int here = 0;
     for (const auto& r : w.runs) {
-      EXPECT_TRUE(r.correct) << name << " seed " << r.seed;
+      EXPECT_FALSE(r.confidently_wrong) << name << " seed " << r.seed;
       EXPECT_GE(r.moved.world_index, 0) << name << " seed " << r.seed;
+      correct += r.correct;
+      ++runs;
       here += r.moved.updated;
       // An updated model is noted as moved: the piece kept its id.
       if (r.moved.updated) {
@@ -424,7 +428,9 @@ TEST(RelocTest, FurnitureMovedHalfAMetreIsFoundMovedAndModelledAtItsNewPlace) {
     std::printf("%s: model updated in %d of %zu runs\n", name, here, w.runs.size());
     updated += here;
   }
-  EXPECT_GE(updated, 13);
+  EXPECT_EQ(runs, 30);
+  EXPECT_GE(correct, 29);
+  EXPECT_GE(updated, 20);
 }
 
 TEST(RelocTest, FurnitureMovedHalfAMetreIsDetectedAndKeepsItsId) {

@@ -57,11 +57,21 @@ double Gap(const sim::Box& a, const sim::Box& b) {
   return std::hypot(gx, gy);
 }
 
-// The saved map's object for world object `index`: the one whose centre lies
-// nearest the piece's, within 0.3 m; 0 if none.
-int SavedObjectFor(const sim::World& world, size_t index, const robot::MapSnapshot& saved,
+// The bounding box of the world's boxes `boxes` (one piece of furniture).
+sim::Box Bounds(const sim::World& world, const std::vector<size_t>& boxes) {
+  sim::Box b{1e18, 1e18, -1e18, -1e18};
+  for (size_t k : boxes) {
+    const sim::Box& o = world.objects[k];
+    b = {std::min(b.xmin, o.xmin), std::min(b.ymin, o.ymin), std::max(b.xmax, o.xmax), std::max(b.ymax, o.ymax)};
+  }
+  return b;
+}
+
+// The saved map's object for the piece made of the world's `boxes`: the one
+// whose centre lies nearest the piece's, within 0.3 m; 0 if none.
+int SavedObjectFor(const sim::World& world, const std::vector<size_t>& boxes, const robot::MapSnapshot& saved,
                    const Pose2& map_to_world) {
-  const Eigen::Vector2d c = Centre(world.objects[index]);
+  const Eigen::Vector2d c = Centre(Bounds(world, boxes));
   int id = 0;
   double best = 0.3;
   for (const auto& o : saved.objects) {
@@ -75,18 +85,21 @@ int SavedObjectFor(const sim::World& world, size_t index, const robot::MapSnapsh
 }
 
 // The move for run `seed`: a piece the saved map modelled, one of the four
-// directions, among the allowed ones (uniform); world_index -1 if none.
+// directions, among the allowed ones (uniform); world_index -1 if none. A
+// piece is all the boxes that touch (FurniturePieces): an L-shaped desk is
+// two boxes in a world file and moves as one.
 RelocRun::Moved PickMove(const sim::World& world, const robot::MapSnapshot& saved, const Pose2& map_to_world,
                          const RelocOptions& ro, uint64_t seed) {
   std::vector<RelocRun::Moved> candidates;
   const double steps[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
-  for (size_t k = 0; k < world.objects.size(); ++k) {
-    const int id = SavedObjectFor(world, k, saved, map_to_world);
+  for (const std::vector<size_t>& piece : FurniturePieces(world)) {
+    const int id = SavedObjectFor(world, piece, saved, map_to_world);
     if (id == 0) continue;
     for (const auto& s : steps) {
-      if (!MoveObject(world, k, s[0] * ro.move_m, s[1] * ro.move_m, ro.move_gap_m)) continue;
+      if (!MovePiece(world, piece, s[0] * ro.move_m, s[1] * ro.move_m, ro.move_gap_m)) continue;
       RelocRun::Moved m;
-      m.world_index = static_cast<int>(k);
+      m.world_index = static_cast<int>(piece.front());
+      m.boxes = piece;
       m.saved_id = id;
       m.dx = s[0] * ro.move_m;
       m.dy = s[1] * ro.move_m;
@@ -102,8 +115,7 @@ RelocRun::Moved PickMove(const sim::World& world, const robot::MapSnapshot& save
 // place with a note, nothing left where it was.
 void ScoreMove(const sim::World& before, const robot::MapSnapshot& out, const Pose2& map_to_world,
                const RelocOptions& ro, RelocRun::Moved* m) {
-  const sim::Box& was = before.objects[static_cast<size_t>(m->world_index)];
-  const Eigen::Vector2d old_c = Centre(was), new_c = old_c + Eigen::Vector2d(m->dx, m->dy);
+  const Eigen::Vector2d old_c = Centre(Bounds(before, m->boxes)), new_c = old_c + Eigen::Vector2d(m->dx, m->dy);
   bool at_new = false, left_at_old = false;
   m->box = "gone";
   for (const auto& o : out.objects) {
@@ -335,7 +347,7 @@ RelocWorld EvaluateRelocalization(const sim::World& world, const robot::CoreOpti
     const uint64_t seed = ro.seed + 1 + static_cast<uint64_t>(i);
     const RelocRun::Moved m = PickMove(world, saved, w.map_to_world, ro, seed);
     const sim::World moved =
-        m.world_index < 0 ? world : *MoveObject(world, static_cast<size_t>(m.world_index), m.dx, m.dy, ro.move_gap_m);
+        m.world_index < 0 ? world : *MovePiece(world, m.boxes, m.dx, m.dy, ro.move_gap_m);
     const std::vector<Pose2> start = RandomFreeStarts(moved, 1, clearance, seed * 7919 + 13);
     if (start.empty()) continue;
     w.runs.push_back(RunOne(moved, clean, saved, w.map_to_world, start[0], seed, ro, &world, m));
@@ -343,36 +355,71 @@ RelocWorld EvaluateRelocalization(const sim::World& world, const robot::CoreOpti
   return w;
 }
 
+std::vector<std::vector<size_t>> FurniturePieces(const sim::World& world) {
+  constexpr double kTouch = 0.01;
+  const size_t n = world.objects.size();
+  std::vector<int> piece(n, -1);
+  std::vector<std::vector<size_t>> out;
+  for (size_t k = 0; k < n; ++k) {
+    if (piece[k] >= 0) continue;
+    piece[k] = static_cast<int>(out.size());
+    out.push_back({k});
+    for (size_t i = 0; i < out.back().size(); ++i) {  // breadth first over touching boxes
+      const size_t a = out.back()[i];
+      for (size_t b = 0; b < n; ++b) {
+        if (piece[b] < 0 && Gap(world.objects[a], world.objects[b]) < kTouch) {
+          piece[b] = piece[k];
+          out.back().push_back(b);
+        }
+      }
+    }
+    std::sort(out.back().begin(), out.back().end());
+  }
+  return out;
+}
+
 std::optional<sim::World> MoveObject(const sim::World& world, size_t index, double dx, double dy,
                                      double gap_m) {
-  if (index >= world.objects.size()) return std::nullopt;
-  sim::World out = world;
-  const sim::Box& was = world.objects[index];
-  sim::Box& b = out.objects[index];
-  b = {was.xmin + dx, was.ymin + dy, was.xmax + dx, was.ymax + dy};
-  for (size_t k = 0; k < world.objects.size(); ++k) {
-    if (k != index && Gap(b, world.objects[k]) < gap_m) return std::nullopt;
+  return MovePiece(world, {index}, dx, dy, gap_m);
+}
+
+std::optional<sim::World> MovePiece(const sim::World& world, const std::vector<size_t>& boxes, double dx,
+                                    double dy, double gap_m) {
+  if (boxes.empty()) return std::nullopt;
+  for (size_t k : boxes) {
+    if (k >= world.objects.size()) return std::nullopt;
   }
-  // Inside the room: its corners (just inside) in the outline, no wall through it.
+  const auto in_piece = [&](size_t k) { return std::find(boxes.begin(), boxes.end(), k) != boxes.end(); };
+  sim::World out = world;
   sim::World room = world;
   room.objects.clear();
-  constexpr double kIn = 1e-3;
-  const Pose2 corners[] = {{b.xmin + kIn, b.ymin + kIn, 0}, {b.xmax - kIn, b.ymin + kIn, 0},
-                           {b.xmax - kIn, b.ymax - kIn, 0}, {b.xmin + kIn, b.ymax - kIn, 0}};
-  std::string why;
-  for (const Pose2& c : corners) {
-    if (!sim::FreePose(room, c, 0, &why)) return std::nullopt;
-  }
-  for (const sim::Segment& s : room.Segments()) {
-    const sim::Box wall{std::min(s.a.x, s.b.x), std::min(s.a.y, s.b.y), std::max(s.a.x, s.b.x),
-                        std::max(s.a.y, s.b.y)};
-    if (wall.xmax > b.xmin + kIn && wall.xmin < b.xmax - kIn && wall.ymax > b.ymin + kIn &&
-        wall.ymin < b.ymax - kIn)
+  const std::vector<sim::Segment> walls = room.Segments();
+  for (size_t index : boxes) {
+    const sim::Box& was = world.objects[index];
+    sim::Box& b = out.objects[index];
+    b = {was.xmin + dx, was.ymin + dy, was.xmax + dx, was.ymax + dy};
+    for (size_t k = 0; k < world.objects.size(); ++k) {
+      if (!in_piece(k) && Gap(b, world.objects[k]) < gap_m) return std::nullopt;
+    }
+    // Inside the room: its corners (just inside) in the outline, no wall through it.
+    constexpr double kIn = 1e-3;
+    const Pose2 corners[] = {{b.xmin + kIn, b.ymin + kIn, 0}, {b.xmax - kIn, b.ymin + kIn, 0},
+                             {b.xmax - kIn, b.ymax - kIn, 0}, {b.xmin + kIn, b.ymax - kIn, 0}};
+    std::string why;
+    for (const Pose2& c : corners) {
+      if (!sim::FreePose(room, c, 0, &why)) return std::nullopt;
+    }
+    for (const sim::Segment& s : walls) {
+      const sim::Box wall{std::min(s.a.x, s.b.x), std::min(s.a.y, s.b.y), std::max(s.a.x, s.b.x),
+                          std::max(s.a.y, s.b.y)};
+      if (wall.xmax > b.xmin + kIn && wall.xmin < b.xmax - kIn && wall.ymax > b.ymin + kIn &&
+          wall.ymin < b.ymax - kIn)
+        return std::nullopt;
+      const double g = Gap(b, wall);
+      // Far enough from the wall, or still against a wall it stood against (moved along it).
+      if (g >= gap_m || (g < 1e-9 && Gap(was, wall) < 1e-9)) continue;
       return std::nullopt;
-    const double g = Gap(b, wall);
-    // Far enough from the wall, or still against a wall it stood against (moved along it).
-    if (g >= gap_m || (g < 1e-9 && Gap(was, wall) < 1e-9)) continue;
-    return std::nullopt;
+    }
   }
   return out;
 }
@@ -401,7 +448,8 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
      << " s, or still off when the run ended. *Correct*: committed, never confidently wrong, "
         "within those bounds at the end.\n\n";
   if (mv) {
-    md << "Moved furniture: before each run one piece the saved map modelled was moved by "
+    md << "Moved furniture: before each run one piece the saved map modelled (a piece: the world's boxes "
+          "that touch, as an L-shaped desk; column *piece moved* lists its boxes) was moved by "
        << F(ro.move_m, 2) << " m along x or y (seeded; to a place inside the room at least "
        << F(ro.move_gap_m, 2)
        << " m from every other piece and from the walls, or still against the wall it stood against); "
@@ -485,7 +533,12 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
         if (m.world_index < 0) {
           md << " none could be moved | - | - | - |";
         } else {
-          md << " " << m.world_index << ": " << m.saved_id << ", " << F(m.dx, 2) << ", " << F(m.dy, 2) << " | "
+          std::string boxes;
+          for (size_t k : m.boxes) {
+            if (!boxes.empty()) boxes += '+';
+            boxes += std::to_string(k);
+          }
+          md << " " << boxes << ": " << m.saved_id << ", " << F(m.dx, 2) << ", " << F(m.dy, 2) << " | "
              << (m.noted ? "yes" : "no") << " | " << (m.updated ? "yes" : "no") << " | " << m.box << " |";
         }
       }

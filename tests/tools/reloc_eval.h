@@ -87,6 +87,7 @@ struct RelocRun {
   // RelocOptions::move_m > 0: the piece of furniture moved before this run.
   struct Moved {
     int world_index = -1;  // in the world's objects; -1: none could be moved
+    std::vector<size_t> boxes;  // the piece's boxes (FurniturePieces; world_index is the first)
     int saved_id = 0;      // the saved map's object for it
     double dx = 0, dy = 0; // world frame
     bool noted = false;    // the object with saved_id carries a "moved ..." note
@@ -126,9 +127,20 @@ struct RelocOptions {
   double moved_match_m = 0.15; // an object's centre this close to a piece's is that piece
 };
 
-// The world with objects[index] shifted by (dx, dy), if the move is allowed
-// (RelocOptions::move_m): inside the room, no wall through it, at least gap_m
-// from every other piece and from every wall it does not touch.
+// The world's pieces of furniture: its boxes grouped by touching (within
+// 1 cm). A world file draws an L-shaped desk or compound furniture (the
+// paper's Fig. 16) as boxes that touch; the saved map models it as one object,
+// and a move (RelocOptions::move_m) moves it whole. Each piece's box indices
+// are sorted; pieces in the order of their first box.
+std::vector<std::vector<size_t>> FurniturePieces(const sim::World& world);
+
+// The world with the piece made of objects[boxes] shifted by (dx, dy), if the
+// move is allowed (RelocOptions::move_m): each box inside the room, no wall
+// through it, at least gap_m from every box of other pieces and from every
+// wall it does not touch (or still against a wall it stood against).
+std::optional<sim::World> MovePiece(const sim::World& world, const std::vector<size_t>& boxes, double dx,
+                                    double dy, double gap_m);
+// MovePiece of the one box objects[index].
 std::optional<sim::World> MoveObject(const sim::World& world, size_t index, double dx, double dy,
                                      double gap_m);
 

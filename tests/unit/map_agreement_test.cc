@@ -58,9 +58,9 @@ class MapAgreementTest : public ::testing::Test {
   // side is not there: the 106th ray finding nothing makes 106 of 150 (more
   // than scan_max_disagree 0.7) disagree, all of them object 7's.
   void SetUp() override {
-    agreement_.Reset(wall_);
-    for (int i = 0; i < 150; ++i) ASSERT_TRUE(agreement_.Step(wall_, Scan(Next(), 0.5, {}), model_));
-    for (int i = 0; i < 106; ++i) ASSERT_TRUE(agreement_.Step(object_, Scan(Next(), {}, {}), model_)) << i;
+    agreement_.Reset(wall_, model_);
+    for (int i = 0; i < 150; ++i) ASSERT_TRUE(agreement_.Step(wall_, Scan(Next(), 0.5, {})));
+    for (int i = 0; i < 106; ++i) ASSERT_TRUE(agreement_.Step(object_, Scan(Next(), {}, {}))) << i;
     EXPECT_NEAR(agreement_.scan_agreement(), 44.0 / 150, 1e-9);
   }
   double Next(double dt = 0.1) { return t_ += dt; }
@@ -75,15 +75,18 @@ class MapAgreementTest : public ::testing::Test {
 
 TEST_F(MapAgreementTest, OneObjectsRaysFindingNothingAreSetAsideAndItIsReportedMovedOnceTheRestAgrees) {
   // Its rays are no longer judged: beside it nothing disagrees.
-  for (int i = 0; i < 20; ++i) EXPECT_TRUE(agreement_.Step(object_, Scan(Next(), {}, {}), model_));
+  for (int i = 0; i < 20; ++i) EXPECT_TRUE(agreement_.Step(object_, Scan(Next(), {}, {})));
   // On probation: reported once moved_confirm_rays (150) more rays agree
   // within moved_confirm_s (12 s; here 2 + 7.5 s).
   for (int i = 0; i < 149; ++i) {
-    ASSERT_TRUE(agreement_.Step(wall_, Scan(Next(0.05), 0.5, {}), model_));
+    ASSERT_TRUE(agreement_.Step(wall_, Scan(Next(0.05), 0.5, {})));
     ASSERT_TRUE(agreement_.TakeMoved().empty()) << i;
   }
-  ASSERT_TRUE(agreement_.Step(wall_, Scan(Next(0.05), 0.52, {}), model_));
-  EXPECT_EQ(agreement_.TakeMoved(), std::vector<int>({7}));
+  ASSERT_TRUE(agreement_.Step(wall_, Scan(Next(0.05), 0.52, {})));
+  const std::vector<ObjectModel> moved = agreement_.TakeMoved();
+  ASSERT_EQ(moved.size(), 1u);
+  EXPECT_EQ(moved[0].id, 7);
+  EXPECT_EQ(moved[0].lines, std::vector<int>({2}));
   EXPECT_TRUE(agreement_.TakeMoved().empty());  // once
 }
 
@@ -91,7 +94,7 @@ TEST_F(MapAgreementTest, WhenTheRestDisagreesOnProbationTheMapDisagreesAndNothin
   // A kidnap beside a piece of furniture looks like it at first; then the
   // walls find nothing either.
   bool disagreed = false;
-  for (int i = 0; i < 150 && !disagreed; ++i) disagreed = !agreement_.Step(wall_, Scan(Next(), {}, {}), model_);
+  for (int i = 0; i < 150 && !disagreed; ++i) disagreed = !agreement_.Step(wall_, Scan(Next(), {}, {}));
   EXPECT_TRUE(disagreed);
   EXPECT_TRUE(agreement_.TakeMoved().empty());
 }
@@ -101,7 +104,7 @@ TEST_F(MapAgreementTest, ProbationWithoutEnoughRaysEndsInDisagreementAfterItsTim
   const double set_aside = t_;
   double disagreed_at = -1;
   for (int i = 0; i < 200 && disagreed_at < 0; ++i) {
-    if (!agreement_.Step(object_, Scan(Next(), {}, {}), model_)) disagreed_at = t_;
+    if (!agreement_.Step(object_, Scan(Next(), {}, {}))) disagreed_at = t_;
   }
   EXPECT_NEAR(disagreed_at - set_aside, options_.moved_confirm_s, 0.15);
   EXPECT_TRUE(agreement_.TakeMoved().empty());
@@ -112,11 +115,11 @@ TEST(MapAgreementWallTest, AWallsRaysFindingNothingAreNotSetAside) {
   const slam::Slam wall = At({0, 0, 0});
   const EnvironmentModel model = Model();
   MapAgreement agreement(options, Mounts());
-  agreement.Reset(wall);
+  agreement.Reset(wall, model);
   double t = 0;
-  for (int i = 0; i < 150; ++i) ASSERT_TRUE(agreement.Step(wall, Scan(t += 0.1, 0.5, {}), model));
+  for (int i = 0; i < 150; ++i) ASSERT_TRUE(agreement.Step(wall, Scan(t += 0.1, 0.5, {})));
   int agreeing_steps = 0;
-  while (agreement.Step(wall, Scan(t += 0.1, {}, {}), model)) ++agreeing_steps;
+  while (agreement.Step(wall, Scan(t += 0.1, {}, {}))) ++agreeing_steps;
   EXPECT_EQ(agreeing_steps, 105);  // the 106th ray finding nothing: the map disagrees
 }
 

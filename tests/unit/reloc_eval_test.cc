@@ -165,6 +165,41 @@ TEST(RelocEvalTest, FurnitureIsMovedOnlyToAFreePlaceOrAlongItsWall) {
   EXPECT_FALSE(metrics::MoveObject(w, 5, 0.5, 0, 0.45).has_value());  // no such piece
 }
 
+// Boxes that touch are one piece of furniture (the paper's Fig. 16 draws an
+// L-shaped desk as two boxes): found together, and moved together, never
+// half of it away from the other half.
+TEST(RelocEvalTest, TouchingBoxesAreOnePieceAndMoveTogether) {
+  sim::World w;
+  w.outline = {{0, 0}, {4, 0}, {4, 4}, {0, 4}};
+  // Fig. 16's upper desk (two boxes touching at x = 2.1), a box 1 cm clear of
+  // nothing else, and a chain of three touching boxes.
+  w.objects = {{1.3, 2.2, 2.1, 2.8}, {2.1, 2.2, 2.5, 3.0}, {3.0, 0.5, 3.5, 1.0},
+               {0.5, 0.5, 1.0, 1.0}, {1.0, 0.6, 1.5, 1.2}, {1.5, 0.5, 1.8, 0.9}};
+  w.start = {3.5, 3.5, 0};
+  const auto pieces = metrics::FurniturePieces(w);
+  ASSERT_EQ(pieces.size(), 3u);
+  EXPECT_EQ(pieces[0], (std::vector<size_t>{0, 1}));
+  EXPECT_EQ(pieces[1], (std::vector<size_t>{2}));
+  EXPECT_EQ(pieces[2], (std::vector<size_t>{3, 4, 5}));
+  // The desk 0.5 m left: both boxes move, exactly.
+  const auto left = metrics::MovePiece(w, pieces[0], -0.5, 0, 0.45);
+  ASSERT_TRUE(left.has_value());
+  EXPECT_DOUBLE_EQ(left->objects[0].xmin, 0.8);
+  EXPECT_DOUBLE_EQ(left->objects[1].xmin, 1.6);
+  EXPECT_DOUBLE_EQ(left->objects[1].ymax, 3.0);
+  EXPECT_DOUBLE_EQ(left->objects[3].xmin, 0.5);  // other pieces stay
+  // A piece's own boxes are not "another piece" for the gap; the others are:
+  // 0.5 m down leaves the desk 0.5 m above the chain (allowed), 1.0 m down
+  // puts it against the chain (refused).
+  EXPECT_TRUE(metrics::MovePiece(w, pieces[0], 0, -0.5, 0.45).has_value());
+  EXPECT_FALSE(metrics::MovePiece(w, pieces[0], 0, -1.0, 0.45).has_value());
+  // Half the desk alone cannot leave the other half by 0.5 m to the right
+  // (it is blocked by it): only as a whole.
+  EXPECT_FALSE(metrics::MoveObject(w, 0, 0.5, 0, 0.45).has_value());
+  EXPECT_TRUE(metrics::MovePiece(w, pieces[0], 0.5, 0, 0.45).has_value());
+  EXPECT_FALSE(metrics::MovePiece(w, {0, 9}, 0.5, 0, 0.45).has_value());  // no such box
+}
+
 // The hypotheses picture draws each hypothesis' placement of the local map: in
 // a 4 x 3 m room, a local wall seen 1 m in front of the start, placed by the
 // right hypothesis onto the saved wall (same pixels as the saved line) and by
