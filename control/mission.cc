@@ -142,7 +142,20 @@ void Mission::StepChanges(const slam::Slam& slam) {
   for (int id : moved) {
     const auto& objects = modeler_.model().objects;
     const auto o = std::find_if(objects.begin(), objects.end(), [&](const auto& x) { return x.id == id; });
-    if (o != objects.end()) ObjectMoved(ObjectModel(*o));
+    if (o == objects.end()) continue;
+    // As the saved map had it (its size is what the piece is found again by),
+    // with every side the model has for it now (one stretched over the new
+    // place included).
+    ObjectModel was = *o;
+    const auto& checked = checked_model_.objects;
+    const auto c = std::find_if(checked.begin(), checked.end(), [&](const auto& x) { return x.id == id; });
+    if (c != checked.end()) {
+      was.box = c->box;
+      for (int line : c->lines) {
+        if (std::find(was.lines.begin(), was.lines.end(), line) == was.lines.end()) was.lines.push_back(line);
+      }
+    }
+    ObjectMoved(was);
   }
 }
 

@@ -72,6 +72,12 @@ bool Modeler::CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& 
 
 void Modeler::NoteMoved(int id, const Box& was) {
   moved_.emplace_back(id, was);
+  // Its contour and any giving up were where it stood: found again, it is
+  // judged on what is seen of it there.
+  closed_by_contour_.erase(std::remove(closed_by_contour_.begin(), closed_by_contour_.end(), id),
+                           closed_by_contour_.end());
+  given_up_.erase(std::remove_if(given_up_.begin(), given_up_.end(), [&](const auto& g) { return g.first == id; }),
+                  given_up_.end());
   model_.objects.erase(std::remove_if(model_.objects.begin(), model_.objects.end(),
                                       [&](const ObjectModel& o) { return o.id == id; }),
                        model_.objects.end());
@@ -319,9 +325,12 @@ bool Modeler::TakeMoved(ObjectModel* obj) {
 
 void Modeler::RenameNewAsMoved(ObjectModel* obj) {
   // Modelled (as new) before the saved piece was found missing: once it is
-  // complete, and so has its true size, it may be that piece.
+  // complete, and so has its true size, it may be that piece. So may one
+  // given up with three sides or more (a contour that timed out in a tight
+  // gap): its box spans its sides, and TakeMoved asks for the piece's size.
   const auto fresh = std::find(new_ids_.begin(), new_ids_.end(), obj->id);
-  if (!obj->complete || moved_.empty() || fresh == new_ids_.end()) return;
+  const bool sized = obj->complete || (obj->given_up && obj->lines.size() >= 3);
+  if (!sized || moved_.empty() || fresh == new_ids_.end()) return;
   const int was = obj->id;
   if (!TakeMoved(obj)) return;
   new_ids_.erase(fresh);
@@ -375,7 +384,7 @@ void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_l
       if (gid == obj.id && !obj.complete) {
         // (A contoured object that has since been closed is not given up.)
         obj.given_up = true;
-        obj.note = why;
+        obj.note = obj.note.empty() ? why : obj.note + "; " + why;  // ("moved ..." stays first)
       }
     }
     if (seeded_) RenameNewAsMoved(&obj);

@@ -246,6 +246,55 @@ TEST(RoomModelTest, AMovedPieceModelledAsNewBeforeItWasFoundMissingTakesItsIdBut
   EXPECT_EQ(third.objects[0].note.rfind("moved since the saved map by 160 cm", 0), 0u);
 }
 
+TEST(RoomModelTest, AMovedPieceGivenUpWithThreeSidesOfItsSizeTakesItsIdAndKeepsBothNotes) {
+  // The saved map: one free box at (2.6, 2.6). It was found missing; today it
+  // stands at (1.0, 2.6) in a tight spot: one side is mapped first (a new
+  // object: not the piece's size), then two more, and the contour following
+  // times out (Fig. 16's desk moved 0.5 m towards a wall).
+  auto saved_lines = Room();
+  for (const auto& l : Box06(11, 2.6, 2.6)) saved_lines.push_back(l);
+  Modeler before{ModelOptions{}};
+  const EnvironmentModel saved = before.Update(saved_lines, Loop());
+  ASSERT_EQ(saved.objects.size(), 1u);
+  const ObjectModel piece = saved.objects[0];
+
+  Modeler m{ModelOptions{}};
+  m.Seed(saved, Loop());
+  m.NoteMoved(piece.id, piece.box);
+  const auto sides = Box06(21, 1.0, 2.6);
+  auto lines = Room();
+  lines.push_back(sides[0]);
+  const EnvironmentModel& one = m.Update(lines, Loop());
+  ASSERT_EQ(one.objects.size(), 1u);
+  const int fresh = one.objects[0].id;
+  EXPECT_NE(fresh, piece.id);
+  EXPECT_EQ(one.objects[0].note, "new since the saved map");
+  // Three sides, still open and not given up: its box may not be its size yet.
+  lines.push_back(sides[1]);
+  lines.push_back(sides[2]);
+  const EnvironmentModel& open = m.Update(lines, Loop());
+  ASSERT_EQ(open.objects.size(), 1u);
+  EXPECT_FALSE(open.objects[0].complete);
+  EXPECT_EQ(open.objects[0].id, fresh);
+  EXPECT_TRUE(m.moved_unplaced());
+
+  // Given up with three sides spanning the piece's size: it is the piece (the
+  // unseen left face at the mean of the ends that reach it, x 1.04: 158 cm).
+  m.GiveUp(fresh, "contour following timed out");
+  const EnvironmentModel& given_up = m.Update(lines, Loop());
+  ASSERT_EQ(given_up.objects.size(), 1u);
+  EXPECT_EQ(given_up.objects[0].id, piece.id);
+  EXPECT_TRUE(given_up.objects[0].given_up);
+  EXPECT_FALSE(m.moved_unplaced());
+  // And stays so, both notes kept, "moved" first.
+  const EnvironmentModel& later = m.Update(lines, Loop());
+  ASSERT_EQ(later.objects.size(), 1u);
+  EXPECT_EQ(later.objects[0].id, piece.id);
+  EXPECT_TRUE(later.objects[0].given_up);
+  EXPECT_EQ(later.objects[0].note,
+            "moved since the saved map by 158 cm (was at [260, 260, 320, 320] cm); contour following timed out");
+}
+
 TEST(PathPlannerTest, LeavesATightSpotEvenFromWithinTheHardClearance) {
   PlannerOptions o;
   // The robot stands 0.12 m from a mapped side's (extended) end: within hard_m.
