@@ -168,6 +168,7 @@ void Mission::ObjectMoved(const ObjectModel& o) {
   auto& checked = checked_model_.objects;
   checked.erase(std::remove_if(checked.begin(), checked.end(), [&](const auto& x) { return x.id == o.id; }),
                 checked.end());
+  agreement_.Forget(o.id);
   modeler_.NoteMoved(o.id, o.box);
   reason_ += "; object " + std::to_string(o.id) + " is not where it was";
 }

@@ -140,6 +140,12 @@ bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan) {
   return SetAsideAbsentObject(scan.t);
 }
 
+void MapAgreement::Forget(int object_id) {
+  objects_.erase(std::remove_if(objects_.begin(), objects_.end(), [&](const auto& o) { return o.id == object_id; }),
+                 objects_.end());
+  if (suspect_.id == object_id) suspect_ = {};
+}
+
 bool MapAgreement::Probation(double t) {
   if (suspect_.id == 0) return true;
   if (probation_rays_ >= options_.moved_confirm_rays) {

@@ -128,6 +128,9 @@ class MapAgreement {
   // modeller may have regrouped those sides since (a side the SLAM stretched
   // over the piece's new place joins the new piece's group).
   std::vector<ObjectModel> TakeMoved() { return std::exchange(moved_, {}); }
+  // Object `id` was found moved otherwise (map_changes.h) and its sides left
+  // the map: no longer judged, and a probation on it ends (nothing reported).
+  void Forget(int object_id);
   // The map as it was check_windows windows ago (map frame), to relocalise in.
   const SavedLines& checkpoint() const { return checkpoints_.front(); }
   // Matched share over the judged windows (1 while too few lines).

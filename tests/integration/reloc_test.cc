@@ -398,12 +398,13 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
 // The moved-furniture measurement's fixed-seed subset (irslam-report --reloc 10
 // --reloc-worlds fig14,fig16,fig20 --reloc-move 0.5; docs/relocalization.md
 // "Moved furniture"): 10 runs each, one piece moved 0.5 m (fig16's two desks
-// each move whole), then a whole cleaning in the saved map. Measured 9, 7 and
+// each move whole), then a whole cleaning in the saved map. Measured 9, 8 and
 // 8 of 10 models updated (fig14 + fig20: 3/20 before the IR check's
 // probation, 15/20 before its rays were attributed to the saved objects;
 // fig16 5/10 before a piece found moved by the side check was noted with its
-// saved size and a given-up piece of that size was renamed); the floor keeps
-// the rate from dropping. No run may commit wrong; one fig16 run
+// saved size and a given-up piece of that size was renamed, 7/10 before that
+// check ended the IR check's probation on the piece); the floor keeps the rate
+// from dropping. No run may commit wrong; one fig16 run
 // (seed 11) does not relocalise within 180 s and explores afresh, as designed.
 TEST(RelocTest, FurnitureMovedHalfAMetreIsFoundMovedAndModelledAtItsNewPlace) {
   metrics::RelocOptions ro;
@@ -432,7 +433,7 @@ TEST(RelocTest, FurnitureMovedHalfAMetreIsFoundMovedAndModelledAtItsNewPlace) {
   }
   EXPECT_EQ(runs, 30);
   EXPECT_GE(correct, 29);
-  EXPECT_GE(updated, 22);
+  EXPECT_GE(updated, 23);
 }
 
 TEST(RelocTest, FurnitureMovedHalfAMetreIsDetectedAndKeepsItsId) {

@@ -110,6 +110,22 @@ TEST_F(MapAgreementTest, ProbationWithoutEnoughRaysEndsInDisagreementAfterItsTim
   EXPECT_TRUE(agreement_.TakeMoved().empty());
 }
 
+TEST_F(MapAgreementTest, AnObjectFoundMovedByTheSideCheckEndsItsProbation) {
+  // The side check (map_changes.h) found object 7 moved and its sides left the
+  // map: the probation on it ends, with nothing to report, and no timeout
+  // turns it into a disagreement (before: 12 s later the map disagreed with
+  // every ray judged since agreeing, and the robot relocalised).
+  agreement_.Forget(7);
+  for (int i = 0; i < 200; ++i) ASSERT_TRUE(agreement_.Step(wall_, Scan(Next(), 0.5, {}))) << i;
+  EXPECT_TRUE(agreement_.TakeMoved().empty());
+  // Its rays are no longer anyone's: were the side still in the SLAM's map,
+  // finding nothing there counts like a wall's.
+  bool disagreed = false;
+  for (int i = 0; i < 150 && !disagreed; ++i) disagreed = !agreement_.Step(object_, Scan(Next(), {}, {}));
+  EXPECT_TRUE(disagreed);
+  EXPECT_TRUE(agreement_.TakeMoved().empty());
+}
+
 TEST(MapAgreementWallTest, AWallsRaysFindingNothingAreNotSetAside) {
   RelocalizeOptions options;
   const slam::Slam wall = At({0, 0, 0});
