@@ -50,7 +50,8 @@ for t in "${targets[@]}"; do
   mkdir -p "$work"
   # The shipped config is a seed too (not copied into the corpus: one file).
   if [ "$t" = config ]; then cp "$IRSLAM_ROOT/daemon/irslamd.conf" "$work/shipped.conf"; fi
-  log=$state/logs/$t-$(date -u +%Y%m%dT%H%M%SZ).log
+  # (The pid: two runs of one target on one corpus may start in the same second.)
+  log=$state/logs/$t-$(date -u +%Y%m%dT%H%M%SZ)-$$.log
   echo "fuzz.sh: $t for ${seconds}s" >&2
   start=$(date +%s)
   result=ok
