@@ -26,6 +26,10 @@ inline slam::LineFeature Line(int id, double x0, double y0, double x1, double y1
   return l;
 }
 
+inline slam::LineFeature Line(int id, const Eigen::Vector2d& p0, const Eigen::Vector2d& p1) {
+  return Line(id, p0.x(), p0.y(), p1.x(), p1.y());
+}
+
 }  // namespace irslam::testing
 
 #endif  // IRSLAM_TESTS_TESTING_LINES_H_

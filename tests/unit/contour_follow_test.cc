@@ -4,20 +4,12 @@
 #include <gtest/gtest.h>
 
 #include "robot/robot_core.h"
+#include "tests/testing/lines.h"
 
 namespace irslam::control {
 namespace {
 
-slam::LineFeature Line(int id, Eigen::Vector2d p0, Eigen::Vector2d p1) {
-  slam::LineFeature l;
-  l.id = id;
-  l.p0 = p0;
-  l.p1 = p1;
-  const Eigen::Vector2d d = (p1 - p0).normalized();
-  l.theta = std::atan2(-d.x(), d.y());  // a normal of the line
-  l.rho = l.p0.dot(Eigen::Vector2d(std::cos(l.theta), std::sin(l.theta)));
-  return l;
-}
+using testing::Line;
 
 TEST(ContourFollowTest, NearestPendingObject) {
   EnvironmentModel m;

@@ -9,18 +9,13 @@
 #include <random>
 
 #include "sim/sim_run.h"
+#include "tests/testing/lines.h"
 #include "tests/tools/reloc_picture.h"
 
 namespace irslam::metrics {
 namespace {
 
-slam::LineFeature Line(int id, Eigen::Vector2d p0, Eigen::Vector2d p1) {
-  slam::LineFeature l;
-  l.id = id;
-  l.p0 = p0;
-  l.p1 = p1;
-  return l;
-}
+using testing::Line;
 
 TEST(RelocEvalTest, TheRigidFitRecoversAKnownTransformFromANoisyTrajectory) {
   const Pose2 truth_tf{1.7, -0.4, 2.3};  // map -> world

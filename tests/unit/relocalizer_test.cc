@@ -6,6 +6,8 @@
 #include <random>
 #include <variant>
 
+#include "tests/testing/lines.h"
+
 namespace irslam::slam {
 namespace {
 
@@ -13,21 +15,9 @@ using Vec2 = Eigen::Vector2d;
 
 constexpr double kFollowM = 0.3;  // wall-following distance of the synthetic robot
 
-// A line feature between two end points, rho/theta consistent with them (rho >= 0).
+// A line feature between two end points (tests/testing/lines.h), seen ten times.
 LineFeature MakeLine(int id, const Vec2& a, const Vec2& b) {
-  LineFeature l;
-  l.id = id;
-  l.p0 = a;
-  l.p1 = b;
-  const Vec2 d = (b - a).normalized();
-  Vec2 n(-d.y(), d.x());
-  double rho = n.dot(a);
-  if (rho < 0) {
-    n = -n;
-    rho = -rho;
-  }
-  l.rho = rho;
-  l.theta = std::atan2(n.y(), n.x());
+  LineFeature l = testing::Line(id, a, b);
   l.observations = 10;
   return l;
 }
