@@ -151,9 +151,8 @@ bool MapAgreement::Probation(double t) {
   if (probation_rays_ >= options_.moved_confirm_rays) {
     if (probation_agreeing_ < options_.moved_confirm_agree * probation_rays_) return false;
     // Its lines leave the map (Mission::ObjectMoved): nothing to set aside.
-    objects_.erase(std::remove_if(objects_.begin(), objects_.end(), [&](const auto& o) { return o.id == suspect_.id; }),
-                   objects_.end());
-    moved_.push_back(std::exchange(suspect_, {}));
+    moved_.push_back(suspect_);
+    Forget(suspect_.id);
     return true;
   }
   return t - set_aside_t_ <= options_.moved_confirm_s;

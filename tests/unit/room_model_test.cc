@@ -195,12 +195,23 @@ std::vector<slam::LineFeature> Box06(int id, double x0, double y0) {
           Line(id + 2, x1 - 0.08, y1, x0 + 0.08, y1), Line(id + 3, x0, y1 - 0.08, x0, y0 + 0.08)};
 }
 
+// The saved map of the moved-piece tests: the room and one free 0.6 m box at
+// (2.6, 2.6) (lines 11-14), modelled complete.
+struct SavedBox {
+  std::vector<slam::LineFeature> lines = Room();
+  EnvironmentModel model;
+  SavedBox() {
+    for (const auto& l : Box06(11, 2.6, 2.6)) lines.push_back(l);
+    Modeler before{ModelOptions{}};
+    model = before.Update(lines, Loop());
+  }
+};
+
 TEST(RoomModelTest, AMovedPieceModelledAsNewBeforeItWasFoundMissingTakesItsIdButNotAtItsOldPlace) {
   // The saved map: one free box at (2.6, 2.6).
-  auto saved_lines = Room();
-  for (const auto& l : Box06(11, 2.6, 2.6)) saved_lines.push_back(l);
-  Modeler before{ModelOptions{}};
-  const EnvironmentModel saved = before.Update(saved_lines, Loop());
+  const SavedBox box;
+  const auto& saved_lines = box.lines;
+  const EnvironmentModel& saved = box.model;
   ASSERT_EQ(saved.objects.size(), 1u);
   const ObjectModel piece = saved.objects[0];
   ASSERT_TRUE(piece.complete);
@@ -251,10 +262,8 @@ TEST(RoomModelTest, AMovedPieceGivenUpWithThreeSidesOfItsSizeTakesItsIdAndKeepsB
   // stands at (1.0, 2.6) in a tight spot: one side is mapped first (a new
   // object: not the piece's size), then two more, and the contour following
   // times out (Fig. 16's desk moved 0.5 m towards a wall).
-  auto saved_lines = Room();
-  for (const auto& l : Box06(11, 2.6, 2.6)) saved_lines.push_back(l);
-  Modeler before{ModelOptions{}};
-  const EnvironmentModel saved = before.Update(saved_lines, Loop());
+  const SavedBox box;
+  const EnvironmentModel& saved = box.model;
   ASSERT_EQ(saved.objects.size(), 1u);
   const ObjectModel piece = saved.objects[0];
 
