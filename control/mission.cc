@@ -109,6 +109,13 @@ bool CanStart(MissionState state, const std::string& reason, std::string* why) {
   }
   return true;
 }
+
+std::vector<int> LineIds(const std::vector<slam::LineFeature>& lines) {
+  std::vector<int> ids;
+  ids.reserve(lines.size());
+  for (const auto& l : lines) ids.push_back(l.id);
+  return ids;
+}
 }  // namespace
 
 void Mission::Reset(double t) {
@@ -127,6 +134,7 @@ void Mission::Reset(double t) {
   changes_.Clear();
   line_removals_.clear();
   checked_model_ = {};
+  checked_lines_.clear();
   resume_cleaning_.reset();
   remodel_after_clean_ = false;
 }
@@ -188,6 +196,7 @@ bool Mission::StartInMap(double t, SavedMission saved, std::string* why) {
   resume_cleaning_ = std::move(saved.cleaning);
   modeler_.Seed(saved.model, saved.map.trajectory);
   checked_model_ = saved.model;
+  checked_lines_ = LineIds(saved.map.lines);
   survey_.Exhaust();  // the saved mission surveyed the room already
   reloc_.Begin(t, std::move(saved.map));
   reloc_ran_ = true;
@@ -207,7 +216,8 @@ bool Mission::StartKnown(double t, const slam::Slam& slam, std::string* why) {
   Reset(t);
   resume_cleaning_ = std::move(before);
   checked_model_ = modeler_.model();
-  agreement_.Reset(slam, checked_model_);
+  checked_lines_ = LineIds(slam.map_lines());
+  agreement_.Reset(slam, checked_model_, checked_lines_);
   checking_ = true;
   WatchChanges(slam, slam.map_trajectory());
   survey_.Exhaust();  // the room was surveyed when it was modelled
@@ -264,7 +274,7 @@ WheelCommand Mission::StepRelocalize(double t, double dt, const slam::Slam& slam
       reason_ = "still relocalising (attempt " + std::to_string(reloc_progress_.attempts) + ")";
       return ToWheels(tw, dt);
     }
-    adoption_ = Adoption{Pose2{}, reloc_.map().lines};
+    adoption_ = Adoption{Pose2{}, reloc_.map().lines, true};
     give_up_after_adoption_ = true;
     return Halt();
   }
@@ -292,7 +302,7 @@ void Mission::Adopted(double t, const slam::Slam& slam) {
   bumps_.TransformSince(reloc_bumps_from_, local_to_map_);
   if (reloc_progress_.attempts == 1) WatchChanges(slam, reloc_.map().trajectory);
   reloc_.End();
-  agreement_.Reset(slam, checked_model_);
+  agreement_.Reset(slam, checked_model_, checked_lines_);
   checking_ = true;
   if (give_up_after_adoption_) {
     give_up_after_adoption_ = false;
@@ -324,6 +334,11 @@ bool Mission::CheckAgreement(double t, const slam::Slam& slam, const RangeScan& 
   if (agreement_.Step(slam, scan)) {
     // Its old sides' rays found nothing while the rest of the map agreed.
     for (const ObjectModel& o : agreement_.TakeMoved()) ObjectMoved(o);
+    // Lines mapped from a wrong pose (a kidnap) that the map fell back to.
+    for (int id : agreement_.TakeContradicted()) {
+      line_removals_.push_back(id);
+      reason_ += "; line " + std::to_string(id) + " is not there: removed";
+    }
     return true;
   }
   const auto pct = [](double v) { return std::to_string(static_cast<int>(std::lround(100 * v))); };
@@ -399,7 +414,7 @@ void Mission::RestoreMapOnEnd() {
   // now must leave the saved map as it was before it disagreed (that is what
   // gets saved), not the local one.
   if (state_ != MissionState::kRelocalize || reloc_progress_.attempts < 2 || !reloc_.active()) return;
-  adoption_ = Adoption{Pose2{}, reloc_.map().lines};
+  adoption_ = Adoption{Pose2{}, reloc_.map().lines, true};
   give_up_after_adoption_ = true;
 }
 

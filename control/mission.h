@@ -108,6 +108,10 @@ struct SavedMission {
 struct Adoption {
   Pose2 local_to_map;
   std::vector<slam::LineFeature> lines;
+  // Relocalising failed and the map is restored as it was before it
+  // disagreed: the local SLAM's lines, in no known relation to the map's
+  // frame, are forgotten first (AdoptMap would keep them as new lines).
+  bool restore = false;
 };
 
 // Relocalisation's progress (status.relocalize): searching, or committed.
@@ -280,6 +284,9 @@ class Mission {
   // have grouped a side the SLAM stretched over a moved piece's new place
   // with the new piece.
   EnvironmentModel checked_model_;
+  // The ids of the lines the map had when the mission began working in it
+  // (the rest are this mission's own: agreement_ may find them contradicted).
+  std::vector<int> checked_lines_;
   // Watches the saved furniture for moves (after a commit or a known start).
   void WatchChanges(const slam::Slam& slam, const std::vector<TimedPose>& trajectory);
   void StepChanges(const slam::Slam& slam);

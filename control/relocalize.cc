@@ -26,7 +26,8 @@ options::Table<RelocalizeOptions> RelocalizeKeys() {
       {"scan_max_disagree", &O::scan_max_disagree, 0, 1, "",
        "... of which a larger share disagreeing means the map disagrees (relocalise again)"},
       {"moved_share", &O::moved_share, 0, 1, "",
-       "... unless this share of the disagreeing rays is one object's finding nothing: its rays set aside"},
+       "... unless this share of the disagreeing rays is one object's finding nothing: its rays set aside"
+       " (or finds nothing at lines this mission mapped: those lines dropped)"},
       {"moved_confirm_rays", &O::moved_confirm_rays, 1, 100000, "",
        "... and it is reported moved once this many more rays are judged ..."},
       {"moved_confirm_agree", &O::moved_confirm_agree, 0, 1, "",
@@ -58,8 +59,11 @@ double Relocalize::best_score() const {
   return search_->hypotheses().front().score;
 }
 
-void MapAgreement::Reset(const slam::Slam& slam, const EnvironmentModel& model) {
+void MapAgreement::Reset(const slam::Slam& slam, const EnvironmentModel& model, std::vector<int> saved_lines) {
   objects_ = model.objects;
+  saved_lines_ = std::move(saved_lines);
+  std::sort(saved_lines_.begin(), saved_lines_.end());
+  contradicted_.clear();
   last_ = slam.stats();
   rays_.clear();
   rays_agreeing_ = 0;
@@ -122,6 +126,7 @@ bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan) {
     r.agrees = m && std::abs(*m - expected) <= options_.scan_tolerance_m;
     r.absent = !r.agrees && (!m || *m > expected);
     r.object = object;
+    if (!std::binary_search(saved_lines_.begin(), saved_lines_.end(), line)) r.own_line = line;
     rays_.push_back(r);
     rays_agreeing_ += r.agrees;
     if (suspect_.id != 0) {
@@ -137,7 +142,7 @@ bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan) {
   if (static_cast<int>(rays_.size()) < options_.scan_rays) return true;
   scan_agreement_ = static_cast<double>(rays_agreeing_) / static_cast<double>(rays_.size());
   if (1 - scan_agreement_ <= options_.scan_max_disagree) return true;
-  return SetAsideAbsentObject(scan.t);
+  return DropContradictedLines() || SetAsideAbsentObject(scan.t);
 }
 
 void MapAgreement::Forget(int object_id) {
@@ -156,6 +161,44 @@ bool MapAgreement::Probation(double t) {
     return true;
   }
   return t - set_aside_t_ <= options_.moved_confirm_s;
+}
+
+bool MapAgreement::DropContradictedLines() {
+  // Kidnapped, the robot maps what it sees from the pose it wrongly believes;
+  // the map a relocalisation falls back to (check_windows windows back) may
+  // still hold those lines, found nowhere once the robot is right again. Saved
+  // walls and objects agreeing while rays find nothing at the mission's own
+  // lines: the lines are wrong, not the pose (moved_share as for an object).
+  struct Own {
+    int line, rays, absent;
+  };
+  std::vector<Own> own;
+  int disagreeing = 0;
+  for (const Ray& r : rays_) {
+    disagreeing += !r.agrees;
+    if (r.own_line == 0) continue;
+    auto it = std::find_if(own.begin(), own.end(), [&](const Own& o) { return o.line == r.own_line; });
+    if (it == own.end()) it = own.insert(own.end(), {r.own_line, 0, 0});
+    ++it->rays;
+    it->absent += r.absent;
+  }
+  // A line is contradicted when most of its own rays found nothing there.
+  std::vector<int> lines;
+  int absent = 0;
+  for (const Own& o : own) {
+    if (2 * o.absent <= o.rays) continue;
+    lines.push_back(o.line);
+    absent += o.absent;
+  }
+  if (lines.empty() || absent < options_.moved_share * disagreeing) return false;
+  rays_.erase(std::remove_if(rays_.begin(), rays_.end(),
+                             [&](const Ray& r) {
+                               return std::find(lines.begin(), lines.end(), r.own_line) != lines.end();
+                             }),
+              rays_.end());
+  rays_agreeing_ = static_cast<int>(std::count_if(rays_.begin(), rays_.end(), [](const Ray& r) { return r.agrees; }));
+  contradicted_.insert(contradicted_.end(), lines.begin(), lines.end());
+  return true;
 }
 
 bool MapAgreement::SetAsideAbsentObject(double t) {

@@ -16,7 +16,9 @@
 // map disagrees (the robot was carried elsewhere, or the commit was wrong):
 // the mission relocalises again in the map as it was `check_windows` windows
 // earlier (checkpoints of the map frame's lines and trajectory), so lines
-// inserted from the wrong pose do not stay in the map. A wrong commit is worse
+// inserted from the wrong pose do not stay in the map; any inserted before
+// that checkpoint are dropped once the IR rays find nothing at them while the
+// saved map agrees (DropContradictedLines). A wrong commit is worse
 // than a slow one (the issue): this is the "keeps checking" half of that.
 // Pure: no clock, socket or file.
 #ifndef IRSLAM_CONTROL_RELOCALIZE_H_
@@ -65,7 +67,9 @@ struct RelocalizeOptions {
   // more rays are judged, at least moved_confirm_agree of them agreeing, the
   // object is reported moved; fewer agreeing, or not that many rays within
   // moved_confirm_s, and the map disagrees as before (a kidnap next to a
-  // piece of furniture looks the same at first), the object untouched.
+  // piece of furniture looks the same at first), the object untouched. When
+  // instead moved_share of the disagreeing rays find nothing at lines of the
+  // mission's own (not in the map it began with), those lines are dropped.
   double moved_share = 0.8;
   int moved_confirm_rays = 150;
   double moved_confirm_agree = 0.7;
@@ -119,8 +123,10 @@ class MapAgreement {
   // is that object's for as long as the check runs, whatever the modeller
   // makes of the side later (a side the SLAM stretched over a moved piece's
   // new place is grouped with the new piece's sides, yet its rays still find
-  // nothing where the piece was).
-  void Reset(const slam::Slam& slam, const EnvironmentModel& model);
+  // nothing where the piece was). `saved_lines`: the ids of the lines the map
+  // had when the mission began working in it; any other line is this
+  // mission's own.
+  void Reset(const slam::Slam& slam, const EnvironmentModel& model, std::vector<int> saved_lines);
   // After each control period: false when the map disagrees (see above).
   bool Step(const slam::Slam& slam, const RangeScan& scan);
   // Objects whose rays were set aside and then confirmed moved (each once), as
@@ -128,6 +134,11 @@ class MapAgreement {
   // modeller may have regrouped those sides since (a side the SLAM stretched
   // over the piece's new place joins the new piece's group).
   std::vector<ObjectModel> TakeMoved() { return std::exchange(moved_, {}); }
+  // Lines of this mission's own that the IR rays found nothing at while the
+  // rest of the map agreed (each once): mapped from a wrong pose before a
+  // relocalisation found the robot again (a kidnap), and kept by the map it
+  // fell back to. They are to leave the map; their rays are no longer judged.
+  std::vector<int> TakeContradicted() { return std::exchange(contradicted_, {}); }
   // Object `id` was found moved otherwise (map_changes.h) and its sides left
   // the map: no longer judged, and a probation on it ends (nothing reported).
   void Forget(int object_id);
@@ -147,9 +158,13 @@ class MapAgreement {
     bool agrees = false;
     bool absent = false;  // disagrees: nothing at (or short of) the expected range
     int object = 0;       // the object whose line it expects (0: a wall)
+    int own_line = 0;     // the line it expects, if this mission's own (0: a saved one)
   };
   // The scan judged against the map (false: the map disagrees).
   bool JudgeScan(const slam::Slam& slam, const RangeScan& scan);
+  // The window disagrees: mostly "nothing there" rays at the mission's own
+  // lines? Then those lines are contradicted (true).
+  bool DropContradictedLines();
   // The window disagrees: mostly one object's "nothing there" rays? Then its
   // rays are set aside (true).
   bool SetAsideAbsentObject(double t);
@@ -160,6 +175,8 @@ class MapAgreement {
   std::array<SensorMount, kNumIrSensors> mounts_;
   double last_scan_t_ = -1;
   std::vector<ObjectModel> objects_;  // Reset's model (less those found moved)
+  std::vector<int> saved_lines_;      // sorted
+  std::vector<int> contradicted_;
   std::deque<Ray> rays_;  // judged rays
   int rays_agreeing_ = 0;
   ObjectModel suspect_;         // the object whose rays are set aside (id 0: none)

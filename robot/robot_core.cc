@@ -178,6 +178,7 @@ bool RobotCore::Start(double now_s, std::string* why) {
 
 void RobotCore::AdoptIfAsked(double now_s) {
   if (std::optional<control::Adoption> a = mission_.TakeAdoption()) {
+    if (a->restore) slam_.ForgetMap();
     slam_.AdoptMap(a->local_to_map, a->lines);
     mission_.Adopted(now_s, slam_);
   }

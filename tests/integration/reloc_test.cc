@@ -335,16 +335,28 @@ TEST(RelocTest, StopStartAndRelocaliseKeepTheCellsDoneOverWorldsAndSeeds) {
 // The robot lifted and put down elsewhere (the simulator's kidnap fault) while
 // cleaning in a saved map: the map's disagreement is found, the robot
 // relocalises again, and the saved lines are not corrupted (their ids kept,
-// no line far from every saved one).
+// no line of the mission's own far from every saved one).
 TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
-  const sim::World world = testing::LoadTestWorld("fig14");
+  // RELOC_KIDNAP_WORLD: another world of tests/worlds, for the measurement.
+  const char* name = std::getenv("RELOC_KIDNAP_WORLD");
+  const sim::World world = testing::LoadTestWorld(name ? name : "fig14");
   const Made made = MakeMap(world, 1);
   robot::CoreOptions options = robot::DefaultCoreOptions();
   options.mission.mode = "clean";
+  // Runs 0-3; 27 and 43: mapped from the wrong pose before the kidnap was
+  // found, lines stayed in the map relocalised in, and the robot relocalised
+  // again and again until it gave the map up; 16: never found again, the map
+  // is restored as it was, once with a line of the local SLAM's in it.
+  // RELOC_KIDNAP_RUNS=48: the measurement over seeds 40-87
+  // (docs/relocalization.md).
+  std::vector<int> which = {0, 1, 2, 3, 16, 27, 43};
+  if (const char* n = std::getenv("RELOC_KIDNAP_RUNS")) {
+    which.clear();
+    for (int i = 0; i < std::atoi(n); ++i) which.push_back(i);
+  }
+  if (const char* one = std::getenv("RELOC_KIDNAP_RUN")) which = {std::atoi(one)};  // with RELOC_TRACE
   int detected = 0, recovered = 0;
-  // RELOC_KIDNAP_RUNS=16: the measurement over seeds 40-55 (docs/relocalization.md).
-  const int runs = std::getenv("RELOC_KIDNAP_RUNS") ? std::atoi(std::getenv("RELOC_KIDNAP_RUNS")) : 4;
-  for (int i = 0; i < runs; ++i) {
+  for (int i : which) {
     std::mt19937_64 rng(40 + i);
     const Pose2 start = RandomFreePose(world, &rng);
     const Pose2 drop = RandomFreePose(world, &rng);
@@ -359,10 +371,19 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
     setup.saved_map = made.map;
     int attempts = 0;
     double err_end = 1e9;
+    std::string last_reason;
     sim::InProcessRun run = sim::RunInProcess(
         w, options, 50 + i, 2000,
         [&](const sim::InProcessRun& r) {
           const auto st = r.core->Status(r.t);
+          if (std::getenv("RELOC_TRACE") && st.mission.reason != last_reason) {
+            last_reason = st.mission.reason;
+            const Pose2 est = Compose(made.world_from_map, r.core->slam().map_pose());
+            const Pose2& truth = r.sim->true_pose();
+            std::printf("    %.1f %s: %s (true %.2f %.2f %.2f, estimate %.2f %.2f %.2f, %zu lines)\n", r.t,
+                        control::ToString(r.core->state()), last_reason.c_str(), truth.x, truth.y, truth.theta,
+                        est.x, est.y, est.theta, r.core->slam().num_lines());
+          }
           if (st.relocalize) attempts = st.relocalize->attempts;
           if (st.relocalize && st.relocalize->committed && r.core->slam().in_saved_map()) {
             const Pose2 est = Compose(made.world_from_map, r.core->slam().map_pose());
@@ -373,26 +394,42 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
     const robot::MapSnapshot out = run.core->Map();
     std::printf("kidnap run %d: attempts %d, end %s (%s), final error %.3f m\n", i, attempts,
                 control::ToString(run.core->state()), run.core->Status(run.t).mission.reason.c_str(), err_end);
+    // Recovered: relocalised again, right (within 20 cm) at the end, and the
+    // map not given up (before, runs 27 and 43 counted: right, but the map
+    // kept disagreeing until the mission gave it up).
+    const std::string reason = run.core->Status(run.t).mission.reason;
+    const bool given_up = reason.find("giving up") != std::string::npos || reason.find("lost:") != std::string::npos;
     if (attempts >= 2) ++detected;
-    if (attempts >= 2 && err_end < 0.2) ++recovered;
-    // Not corrupted: every saved line keeps its id, and no line of the output
-    // lies far (> 0.3 m) from the saved map's lines in a direction the map has.
+    if (attempts >= 2 && err_end < 0.2 && !given_up) ++recovered;
+    // Not corrupted: every saved line keeps its id, and every line of the
+    // output lies near (within 0.3 m: its ends) a saved line (fig14's saved
+    // map has the whole room; nothing in it moved).
     for (const auto& l : made.map.lines) {
       EXPECT_TRUE(std::any_of(out.lines.begin(), out.lines.end(), [&](const auto& m) { return m.id == l.id; }))
           << "run " << i << " line " << l.id;
     }
+    for (const auto& m : out.lines) {
+      const auto near = [&](const Eigen::Vector2d& p) {
+        return std::any_of(made.map.lines.begin(), made.map.lines.end(), [&](const auto& l) {
+          sim::Vec2 closest;
+          return sim::PointSegmentDistance({p.x(), p.y()}, {{l.p0.x(), l.p0.y()}, {l.p1.x(), l.p1.y()}}, &closest) <
+                 0.3;
+        });
+      };
+      EXPECT_TRUE(near(m.p0) && near(m.p1)) << "run " << i << ": line " << m.id << " (" << m.p0.transpose()
+                                            << ") - (" << m.p1.transpose() << ") is far from the saved map";
+    }
   }
-  // Measured (these seeds): detected in 3 of 4, recovered in 3 of 4 (2, and 1
-  // before the wall follower stopped waiting with its bumper pressed against
-  // the wall it was put down at; one re-commit 2.1 m off). Over seeds 40-55
-  // (RELOC_KIDNAP_RUNS=16): detected 15 of 16, recovered 15 (6, then 9 before
-  // the loop detector's orbit check let a robot orbiting a small box leave
-  // it, 11 before lines merged into saved ones counted as agreeing, 12 before
-  // the IR-ray agreement was turned on). The target is 90 % recovered:
-  // met on these 16 seeds; not yet judged on more
-  // (docs/relocalization.md). The floors keep today's rates from dropping.
-  EXPECT_GE(detected, 3);
-  EXPECT_GE(recovered, 3);
+  // Measured over seeds 40-87 (RELOC_KIDNAP_RUNS=48): recovered 45 of 48
+  // (43 before lines of the mission's own that the IR rays contradict left
+  // the map: runs 27 and 43), no line far from the saved map in any (4 runs
+  // before that and before a map given up was restored without the local
+  // SLAM's lines). Over these seven runs: detected 6, recovered 5 (3 before;
+  // run 1 is never found kidnapped and waits idle, run 16 is not found
+  // again). The floors keep today's rates from dropping.
+  if (std::getenv("RELOC_KIDNAP_RUNS") || std::getenv("RELOC_KIDNAP_RUN")) return;
+  EXPECT_GE(detected, 6);
+  EXPECT_GE(recovered, 5);
 }
 
 // The moved-furniture measurement's fixed-seed subset (irslam-report --reloc 10

@@ -58,7 +58,7 @@ class MapAgreementTest : public ::testing::Test {
   // side is not there: the 106th ray finding nothing makes 106 of 150 (more
   // than scan_max_disagree 0.7) disagree, all of them object 7's.
   void SetUp() override {
-    agreement_.Reset(wall_, model_);
+    agreement_.Reset(wall_, model_, {1, 2});
     for (int i = 0; i < 150; ++i) ASSERT_TRUE(agreement_.Step(wall_, Scan(Next(), 0.5, {})));
     for (int i = 0; i < 106; ++i) ASSERT_TRUE(agreement_.Step(object_, Scan(Next(), {}, {}))) << i;
     EXPECT_NEAR(agreement_.scan_agreement(), 44.0 / 150, 1e-9);
@@ -131,12 +131,81 @@ TEST(MapAgreementWallTest, AWallsRaysFindingNothingAreNotSetAside) {
   const slam::Slam wall = At({0, 0, 0});
   const EnvironmentModel model = Model();
   MapAgreement agreement(options, Mounts());
-  agreement.Reset(wall, model);
+  agreement.Reset(wall, model, {1, 2});
   double t = 0;
   for (int i = 0; i < 150; ++i) ASSERT_TRUE(agreement.Step(wall, Scan(t += 0.1, 0.5, {})));
   int agreeing_steps = 0;
   while (agreement.Step(wall, Scan(t += 0.1, {}, {}))) ++agreeing_steps;
   EXPECT_EQ(agreeing_steps, 105);  // the 106th ray finding nothing: the map disagrees
+}
+
+// The saved map and a line of the mission's own (9, along y = 7.5, x 2..4),
+// mapped from a wrong pose while the robot was carried elsewhere and kept by
+// the map a relocalisation fell back to: from (3, 7) sensor 1 sees it at 0.5 m.
+class ContradictedLineTest : public ::testing::Test {
+ protected:
+  static slam::Slam WithOwnLine(const Pose2& where) {
+    slam::SlamOptions o;
+    o.mounts = Mounts();
+    slam::Slam s(o);
+    std::vector<slam::LineFeature> lines = Map();
+    lines.push_back(Line(9, 2, 7.5, 4, 7.5));
+    s.AdoptMap(where, lines);
+    return s;
+  }
+  void SetUp() override {
+    agreement_.Reset(wall_, model_, {1, 2});
+    for (int i = 0; i < 150; ++i) ASSERT_TRUE(agreement_.Step(wall_, Scan(t_ += 0.1, 0.5, {})));
+  }
+
+  RelocalizeOptions options_;
+  slam::Slam wall_ = WithOwnLine({0, 0, 0});
+  slam::Slam own_ = WithOwnLine({3, 7, 0});
+  EnvironmentModel model_ = Model();
+  MapAgreement agreement_{options_, Mounts()};
+  double t_ = 0;
+};
+
+TEST_F(ContradictedLineTest, TheMissionsOwnLineFoundNowhereWhileTheSavedMapAgreesIsContradicted) {
+  // Nothing at line 9: the 106th ray would make the map disagree; instead the
+  // line is contradicted (to leave the map) and its rays are no longer judged.
+  int steps = 0;
+  std::vector<int> contradicted;
+  while (contradicted.empty() && steps < 300) {
+    ASSERT_TRUE(agreement_.Step(own_, Scan(t_ += 0.1, {}, {}))) << steps;
+    ++steps;
+    contradicted = agreement_.TakeContradicted();
+  }
+  EXPECT_EQ(steps, 106);
+  EXPECT_EQ(contradicted, std::vector<int>({9}));
+  EXPECT_TRUE(agreement_.TakeContradicted().empty());  // once
+  EXPECT_TRUE(agreement_.TakeMoved().empty());
+  // The mission removes it from the map; the saved map agrees as before.
+  own_.RemoveLines({9});
+  wall_.RemoveLines({9});
+  for (int i = 0; i < 150; ++i) ASSERT_TRUE(agreement_.Step(own_, Scan(t_ += 0.1, {}, {}))) << i;
+  for (int i = 0; i < 150; ++i) ASSERT_TRUE(agreement_.Step(wall_, Scan(t_ += 0.1, 0.5, {}))) << i;
+  EXPECT_NEAR(agreement_.scan_agreement(), 1.0, 1e-9);
+}
+
+TEST_F(ContradictedLineTest, ALineTheRaysMostlyFindIsNotContradicted) {
+  // Line 9 seen where it is (100 rays), then found missing by as many: half
+  // its rays agree, so it is not the line that is wrong; the saved wall finds
+  // nothing too (the robot was carried elsewhere): the map disagrees.
+  for (int i = 0; i < 100; ++i) ASSERT_TRUE(agreement_.Step(own_, Scan(t_ += 0.1, {}, 0.5)));
+  bool disagreed = false;
+  for (int i = 0; i < 150 && !disagreed; ++i) {
+    disagreed = !agreement_.Step(i % 2 ? own_ : wall_, Scan(t_ += 0.1, {}, {}));
+  }
+  EXPECT_TRUE(disagreed);
+  EXPECT_TRUE(agreement_.TakeContradicted().empty());
+}
+
+TEST_F(ContradictedLineTest, ASavedWallFoundNowhereIsNeverContradicted) {
+  bool disagreed = false;
+  for (int i = 0; i < 150 && !disagreed; ++i) disagreed = !agreement_.Step(wall_, Scan(t_ += 0.1, {}, {}));
+  EXPECT_TRUE(disagreed);
+  EXPECT_TRUE(agreement_.TakeContradicted().empty());
 }
 
 }  // namespace
