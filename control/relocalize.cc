@@ -129,7 +129,7 @@ bool MapAgreement::JudgeScan(const slam::Slam& slam, const RangeScan& scan) {
     if (!std::binary_search(saved_lines_.begin(), saved_lines_.end(), line)) r.own_line = line;
     rays_.push_back(r);
     rays_agreeing_ += r.agrees;
-    if (suspect_.id != 0) {
+    if (suspect_.id != 0 && r.own_line == 0) {
       ++probation_rays_;
       probation_agreeing_ += r.agrees;
     }

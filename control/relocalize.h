@@ -64,7 +64,9 @@ struct RelocalizeOptions {
   // moved_share of its disagreeing rays are one saved object's rays finding
   // nothing, that object's rays are set aside (no longer judged) instead of
   // relocalising, and the map is put on probation: once moved_confirm_rays
-  // more rays are judged, at least moved_confirm_agree of them agreeing, the
+  // more rays are judged at saved lines (not at lines this mission mapped,
+  // which agree with the rays even from a wrong pose: a kidnap), at least
+  // moved_confirm_agree of them agreeing, the
   // object is reported moved; fewer agreeing, or not that many rays within
   // moved_confirm_s, and the map disagrees as before (a kidnap next to a
   // piece of furniture looks the same at first), the object untouched. When
