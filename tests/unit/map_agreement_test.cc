@@ -36,11 +36,11 @@ EnvironmentModel Model() {
   return m;
 }
 
-slam::Slam At(const Pose2& where) {
+slam::Slam At(const Pose2& where, const std::vector<slam::LineFeature>& lines = Map()) {
   slam::SlamOptions o;
   o.mounts = Mounts();
   slam::Slam s(o);
-  s.AdoptMap(where, Map());
+  s.AdoptMap(where, lines);
   return s;
 }
 
@@ -145,13 +145,9 @@ TEST(MapAgreementWallTest, AWallsRaysFindingNothingAreNotSetAside) {
 class ContradictedLineTest : public ::testing::Test {
  protected:
   static slam::Slam WithOwnLine(const Pose2& where) {
-    slam::SlamOptions o;
-    o.mounts = Mounts();
-    slam::Slam s(o);
     std::vector<slam::LineFeature> lines = Map();
     lines.push_back(Line(9, 2, 7.5, 4, 7.5));
-    s.AdoptMap(where, lines);
-    return s;
+    return At(where, lines);
   }
   void SetUp() override {
     agreement_.Reset(wall_, model_, {1, 2});
