@@ -163,6 +163,12 @@ bool MapAgreement::Probation(double t) {
   return t - set_aside_t_ <= options_.moved_confirm_s;
 }
 
+template <typename Pred>
+void MapAgreement::DropRays(Pred drop) {
+  rays_.erase(std::remove_if(rays_.begin(), rays_.end(), drop), rays_.end());
+  rays_agreeing_ = static_cast<int>(std::count_if(rays_.begin(), rays_.end(), [](const Ray& r) { return r.agrees; }));
+}
+
 bool MapAgreement::DropContradictedLines() {
   // Kidnapped, the robot maps what it sees from the pose it wrongly believes;
   // the map a relocalisation falls back to (check_windows windows back) may
@@ -191,12 +197,7 @@ bool MapAgreement::DropContradictedLines() {
     absent += o.absent;
   }
   if (lines.empty() || absent < options_.moved_share * disagreeing) return false;
-  rays_.erase(std::remove_if(rays_.begin(), rays_.end(),
-                             [&](const Ray& r) {
-                               return std::find(lines.begin(), lines.end(), r.own_line) != lines.end();
-                             }),
-              rays_.end());
-  rays_agreeing_ = static_cast<int>(std::count_if(rays_.begin(), rays_.end(), [](const Ray& r) { return r.agrees; }));
+  DropRays([&](const Ray& r) { return std::find(lines.begin(), lines.end(), r.own_line) != lines.end(); });
   contradicted_.insert(contradicted_.end(), lines.begin(), lines.end());
   return true;
 }
@@ -223,9 +224,7 @@ bool MapAgreement::SetAsideAbsentObject(double t) {
   const int object = most->first;
   const auto o = std::find_if(objects_.begin(), objects_.end(), [&](const auto& x) { return x.id == object; });
   if (o == objects_.end()) return false;
-  rays_.erase(std::remove_if(rays_.begin(), rays_.end(), [&](const Ray& r) { return r.object == object; }),
-              rays_.end());
-  rays_agreeing_ = static_cast<int>(std::count_if(rays_.begin(), rays_.end(), [](const Ray& r) { return r.agrees; }));
+  DropRays([&](const Ray& r) { return r.object == object; });
   suspect_ = *o;
   set_aside_t_ = t;
   probation_rays_ = probation_agreeing_ = 0;

@@ -164,6 +164,9 @@ class MapAgreement {
   };
   // The scan judged against the map (false: the map disagrees).
   bool JudgeScan(const slam::Slam& slam, const RangeScan& scan);
+  // Removes the judged rays `drop` picks (no longer judged), recounting the agreeing.
+  template <typename Pred>
+  void DropRays(Pred drop);
   // The window disagrees: mostly "nothing there" rays at the mission's own
   // lines? Then those lines are contradicted (true).
   bool DropContradictedLines();
