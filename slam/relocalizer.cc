@@ -334,7 +334,8 @@ PoseHypothesis Score(const RelocalizeOptions& options, const SavedMap& saved,
         if (!(u * v < 0)) continue;
         const double along = prev[m.dir] + (q[m.dir] - prev[m.dir]) * (u / (u - v));
         if (along > m.lo + kEndSlackM && along < m.hi - kEndSlackM)
-          h.conflict_m += options.crossing_conflict_m;
+          h.conflict_m += m.length() >= options.anchor_line_m ? options.crossing_conflict_m
+                                                               : options.short_crossing_conflict_m;
       }
     }
     prev = q;
@@ -564,7 +565,9 @@ options::Table<RelocalizeOptions> RelocalizeKeys() {
        "saved free space (conflict): inside the saved map, farther than this from every saved "
        "line"},
       {"crossing_conflict_m", &R::crossing_conflict_m, 0, 100, "m",
-       "conflict counted for each saved line the local trajectory crosses"},
+       "conflict counted for each saved line the local trajectory crosses ..."},
+      {"short_crossing_conflict_m", &R::short_crossing_conflict_m, 0, 100, "m",
+       "... if it is shorter than anchor_line_m (a furniture side, which may have moved)"},
   };
   return kKeys;
 }

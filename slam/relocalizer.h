@@ -82,7 +82,12 @@ struct RelocalizeOptions {
   double max_time_s = 180;            // relocalising longer than this gives up (mission: fault)
   double min_direction_m = 0.5;       // evidence needed in each of the two directions to commit
   double free_margin_m = 0.3;         // saved free space: farther than this from all saved lines
-  double crossing_conflict_m = 0.5;   // conflict per saved line the local trajectory crosses
+  double crossing_conflict_m = 0.5;   // conflict per saved line the local trajectory crosses ...
+  // ... and per crossing of a saved line shorter than anchor_line_m: a
+  // furniture side, which may have moved since the map was made (the robot
+  // then drives through where it stood, and at full weight that crossing
+  // alone let a symmetric room's wrong rotation win; docs/relocalization.md).
+  double short_crossing_conflict_m = 0.25;
   // Walls do not move, furniture does: the committed hypothesis must have at
   // least min_anchor_m of evidence on saved lines at least anchor_line_m long
   // along each axis (else a piece moved since the map was made could shift the

@@ -443,6 +443,37 @@ TEST(RelocalizerTest, ScoreHypothesisExplainsTheTruthAndNotAShiftedPose) {
   EXPECT_LT(crossed.score, right.score - 0.05);
 }
 
+// Walls do not move, furniture does: driving through where a saved piece of
+// furniture stood (it was moved since the map was made) is weaker evidence
+// against a pose than driving through a wall (the wall crossing above).
+TEST(RelocalizerTest, ACrossedFurnitureSideCountsLessThanACrossedWall) {
+  const World world = RoomWithBox();
+  const Pose2 truth{1.5, -0.5, 1.9};
+  const Evidence ev = Walk(world, truth, 3.0, Perimeter(world) - 0.5, 13);
+  RelocalizeOptions options;
+  options.short_crossing_conflict_m = 0.2;
+  const auto lines = world.Lines();
+  const auto saved_trajectory = world.Trajectory();
+  const PoseHypothesis right =
+      ScoreHypothesis(options, truth, lines, saved_trajectory, ev.lines, ev.trajectory);
+  // Into the free box (0.8 m sides, shorter than anchor_line_m) through its
+  // bottom side and out through its top side, far from any wall.
+  Evidence through = ev;
+  const Pose2 to_local = Inverse(truth);
+  for (double y : {2.2, 2.9, 3.6}) {
+    through.trajectory.push_back({through.trajectory.back().t + 1, Compose(to_local, {1.6, y, M_PI / 2})});
+  }
+  const PoseHypothesis crossed =
+      ScoreHypothesis(options, truth, lines, saved_trajectory, through.lines, through.trajectory);
+  // The step from the wall-following path to (1.6, 2.2) may cross nothing;
+  // the two box sides count 0.2 each, not crossing_conflict_m.
+  EXPECT_NEAR(crossed.conflict_m - right.conflict_m, 2 * options.short_crossing_conflict_m, 1e-9);
+  options.short_crossing_conflict_m = options.crossing_conflict_m;
+  const PoseHypothesis full =
+      ScoreHypothesis(options, truth, lines, saved_trajectory, through.lines, through.trajectory);
+  EXPECT_NEAR(full.conflict_m - right.conflict_m, 2 * options.crossing_conflict_m, 1e-9);
+}
+
 TEST(RelocalizerTest, ScoreHypothesisCountsLinesInFreeSpace) {
   const World world = Rectangle(4, 5.5);
   const RelocalizeOptions options;
@@ -525,7 +556,7 @@ TEST(RelocalizerTest, NoEvidenceNoHypotheses) {
 
 TEST(RelocalizerTest, KeysHaveTheirDefaultsWithinBounds) {
   const RelocalizeOptions defaults;
-  EXPECT_EQ(RelocalizeKeys().size(), 17u);
+  EXPECT_EQ(RelocalizeKeys().size(), 18u);
   for (const auto& key : RelocalizeKeys()) {
     SCOPED_TRACE(std::string(key.name));
     EXPECT_FALSE(key.doc.empty());
