@@ -50,7 +50,7 @@ std::vector<ContourStart> ContourStarts(const ObjectModel& target,
   }
   std::sort(sides.begin(), sides.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<ContourStart> out;
+  std::vector<ContourStart> out, ahead, behind;
   for (const auto& [d, side] : sides) {
     const Eigen::Vector2d mid = 0.5 * (side->p0 + side->p1);
     Eigen::Vector2d n(std::cos(side->theta), std::sin(side->theta));
@@ -65,8 +65,15 @@ std::vector<ContourStart> ContourStarts(const ObjectModel& target,
     }
     if (n.dot(seen_from - mid) < 0) n = -n;
     const Eigen::Vector2d dir(n.y(), -n.x());
-    out.push_back({mid + follow_distance_m * n, std::atan2(dir.y(), dir.x())});
+    const double heading = std::atan2(dir.y(), dir.x());
+    out.push_back({mid + follow_distance_m * n, heading});
+    const bool p1_ahead = dir.dot(side->p1 - side->p0) > 0;
+    ahead.push_back({(p1_ahead ? side->p1 : side->p0) + follow_distance_m * n, heading});
+    behind.push_back({(p1_ahead ? side->p0 : side->p1) + follow_distance_m * n, heading});
   }
+  if (target.kind != ObjectKind::kWallContact) return out;
+  out.insert(out.end(), ahead.begin(), ahead.end());
+  out.insert(out.end(), behind.begin(), behind.end());
   return out;
 }
 

@@ -40,7 +40,12 @@ struct ContourStart {
   Eigen::Vector2d p;
   double heading = 0;
 };
-// The object's sides, nearest the robot first.
+// The object's sides' centres, nearest the robot first; for a wall-contact
+// object, then the same beside each side's end the heading leads to, then
+// beside its other end: a short side that meets a wall (the end of a piece of
+// furniture against it, 0.5 m deep) has its centre too near the wall for the
+// robot, and beside its free end it can start (a piece moved along its wall
+// was left "P1 unreachable"; docs/relocalization.md).
 std::vector<ContourStart> ContourStarts(const ObjectModel& target,
                                         const std::vector<slam::LineFeature>& lines,
                                         const std::vector<TimedPose>& trajectory,

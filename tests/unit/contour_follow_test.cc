@@ -38,7 +38,7 @@ TEST(ContourFollowTest, StartsOnTheSeenSideHeadingWithTheObjectOnTheRight) {
                                                 Line(9, {5, 5}, {6, 5})};
   const std::vector<TimedPose> traj = {{0, {1.5, 0.5, 0}}, {1, {0.5, 1.5, 0}}};
   const auto starts = ContourStarts(box, lines, traj, {1.5, 0, 0}, 0.4);
-  ASSERT_EQ(starts.size(), 2u);  // line 9 is another object's
+  ASSERT_EQ(starts.size(), 2u);  // line 9 is another object's; a free object: centres only
   // The bottom side is nearer the robot: start 0.4 m below its middle, heading -x.
   EXPECT_NEAR(starts[0].p.x(), 1.5, 1e-12);
   EXPECT_NEAR(starts[0].p.y(), 0.6, 1e-12);
@@ -47,6 +47,28 @@ TEST(ContourFollowTest, StartsOnTheSeenSideHeadingWithTheObjectOnTheRight) {
   EXPECT_NEAR(starts[1].p.x(), 0.6, 1e-12);
   EXPECT_NEAR(starts[1].p.y(), 1.5, 1e-12);
   EXPECT_NEAR(starts[1].heading, M_PI / 2, 1e-12);
+}
+
+// The end of a piece of furniture against a wall, seen alone: its centre is
+// 0.25 m from the wall, too near for the robot; beside its free end is not.
+TEST(ContourFollowTest, AShortSideAtAWallCanStartBesideItsFreeEnd) {
+  ObjectModel box;
+  box.lines = {5};
+  box.kind = ObjectKind::kWallContact;
+  const std::vector<slam::LineFeature> lines = {Line(5, {2, 3.5}, {2, 4})};  // wall at y = 4
+  const std::vector<TimedPose> traj = {{0, {2.5, 3, 0}}};                  // seen from the right
+  const auto starts = ContourStarts(box, lines, traj, {3, 2, 0}, 0.3);
+  ASSERT_EQ(starts.size(), 3u);
+  EXPECT_NEAR(starts[0].p.x(), 2.3, 1e-12);
+  EXPECT_NEAR(starts[0].p.y(), 3.75, 1e-12);
+  // Heading -y (the object on the right): the free end is the one ahead.
+  EXPECT_NEAR(starts[1].p.x(), 2.3, 1e-12);
+  EXPECT_NEAR(starts[1].p.y(), 3.5, 1e-12);
+  EXPECT_NEAR(starts[1].heading, -M_PI / 2, 1e-12);
+  EXPECT_NEAR(starts[2].p.y(), 4.0, 1e-12);
+  // A free object's sides are followed from their centres only.
+  box.kind = ObjectKind::kFree;
+  EXPECT_EQ(ContourStarts(box, lines, traj, {3, 2, 0}, 0.3).size(), 1u);
 }
 
 TEST(ContourFollowTest, TimesOut) {
