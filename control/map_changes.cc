@@ -16,6 +16,8 @@ options::Table<MapChangeOptions> MapChangeKeys() {
       {"seen_fraction", &O::seen_fraction, 0.1, 1, "",
        "a side passed in view along this share of its length should have been seen again"},
       {"min_side_m", &O::min_side_m, 0, 10, "m", "shorter sides are not watched"},
+      {"wall_margin_m", &O::wall_margin_m, 0, 2, "m",
+       "the part of a side within this of a wall need not have been passed (the robot cannot go there)"},
       {"min_missing_sides", &O::min_missing_sides, 1, 4, "",
        "an object with this many sides not seen again where they were has moved or gone"},
   };
@@ -38,6 +40,16 @@ void MapChanges::Reset(const std::vector<slam::LineFeature>& lines, const std::v
       w.object = o.id;
       w.observations = l->observations;
       w.passed.assign(static_cast<size_t>(std::ceil((s->a1 - s->a0) / options_.bin_m)), false);
+      // Along the side, the walls across it (room frame: the model's room box).
+      double lo = s->a0, hi = s->a1;
+      if (model.room.box) {
+        const Box& r = *model.room.box;
+        lo = std::max(lo, (s->horizontal ? r.xmin : r.ymin) + options_.wall_margin_m);
+        hi = std::min(hi, (s->horizontal ? r.xmax : r.ymax) - options_.wall_margin_m);
+      }
+      if (hi - lo < options_.min_side_m) continue;
+      w.first = static_cast<size_t>(std::max(0.0, std::floor((lo - s->a0) / options_.bin_m)));
+      w.last = std::min(w.passed.size(), static_cast<size_t>(std::ceil((hi - s->a0) / options_.bin_m)));
       sides_.push_back(std::move(w));
     }
   }
@@ -68,8 +80,10 @@ std::vector<int> MapChanges::Step(const Pose2& me, const std::vector<slam::LineF
       }
       continue;  // judged once the robot has left it (the window with it closed)
     }
-    const double share = static_cast<double>(std::count(w.passed.begin(), w.passed.end(), true)) /
-                         static_cast<double>(std::max<size_t>(1, w.passed.size()));
+    const auto first = w.passed.begin() + static_cast<std::ptrdiff_t>(w.first);
+    const auto last = w.passed.begin() + static_cast<std::ptrdiff_t>(w.last);
+    const double share = static_cast<double>(std::count(first, last, true)) /
+                         static_cast<double>(std::max<size_t>(1, w.last - w.first));
     if (share < options_.seen_fraction) continue;
     // Passed in view along most of its length and left behind: seen again or missing.
     if (d > options_.view_max_m + 0.3 || d < 0 || along < s.a0 - 0.3 || along > s.a1 + 0.3) {

@@ -29,6 +29,11 @@ struct MapChangeOptions {
   double bin_m = 0.05;            // a side's length is marked in bins of this
   double seen_fraction = 0.7;     // passed in view along this share: it should have been seen again
   double min_side_m = 0.2;        // shorter sides are not watched
+  // The part of a side within this of a wall is not asked for: the robot's
+  // centre stays a body radius and more from the wall, so the end side of a
+  // piece against it (0.5 m deep) could never be passed along seen_fraction
+  // of its length (a piece moved along its wall went unnoticed).
+  double wall_margin_m = 0.25;
   int min_missing_sides = 2;      // an object with this many sides missing has moved or gone
 };
 options::Table<MapChangeOptions> MapChangeKeys();  // [relocalize] too
@@ -57,6 +62,7 @@ class MapChanges {
     int object = 0;
     int observations = 0;  // the line's count when watching began
     std::vector<bool> passed;
+    size_t first = 0, last = 0;  // the bins [first, last) asked for (wall_margin_m)
     bool missing = false;
     bool decided = false;  // seen again, or judged missing
   };

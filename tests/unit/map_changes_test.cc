@@ -1,0 +1,79 @@
+#include "control/map_changes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "tests/testing/lines.h"
+
+namespace irslam::control {
+namespace {
+
+using testing::Line;
+
+// A 4 m x 4 m room and a piece against its top wall (y = 4): x 1.6..2.6,
+// y 3.5..4 (the paper's Fig. 20, box 1), its sides seen from outside.
+std::vector<slam::LineFeature> Lines() {
+  return {Line(10, 1.6, 3.5, 1.6, 4.0), Line(11, 1.6, 3.5, 2.6, 3.5), Line(12, 2.6, 3.5, 2.6, 4.0)};
+}
+
+std::vector<TimedPose> SavedTrajectory() {
+  return {{0, {1.2, 3.75, 0}}, {1, {2.1, 3.0, 0}}, {2, {3.0, 3.75, 0}}};
+}
+
+EnvironmentModel Model() {
+  EnvironmentModel m;
+  m.room.box = Box{0, 0, 4, 4};
+  ObjectModel o;
+  o.id = 5;
+  o.kind = ObjectKind::kWallContact;
+  o.lines = {10, 11, 12};
+  o.complete = true;
+  m.objects.push_back(o);
+  return m;
+}
+
+// The robot along an end side, 0.3 m from it, towards the wall, as an edge
+// pass goes: its centre stops 0.25 m short of the wall; then away.
+std::vector<int> PassEndSide(MapChanges* changes, double x, double away_x,
+                             const std::vector<slam::LineFeature>& lines) {
+  std::vector<int> moved;
+  for (double y = 3.0; y <= 3.75 + 1e-9; y += 0.02) {
+    for (int id : changes->Step({x, y, M_PI / 2}, lines)) moved.push_back(id);
+  }
+  for (double s = 0; s <= 1.0 + 1e-9; s += 0.02) {
+    for (int id : changes->Step({x + (away_x - x) * s, 3.75 - 0.75 * s, 0}, lines)) moved.push_back(id);
+  }
+  return moved;
+}
+
+TEST(MapChangesTest, EndSidesOfAPieceAtAWallPassedAsFarAsTheRobotGoesAndNotSeenAgainMeanItMoved) {
+  MapChanges changes(MapChangeOptions{});
+  changes.Reset(Lines(), SavedTrajectory(), Model(), 0.1);
+  // The right end side from the right, then the left one from the left: the
+  // SLAM matched neither again (their observation counts unchanged).
+  EXPECT_TRUE(PassEndSide(&changes, 2.9, 3.6, Lines()).empty());  // one side missing is not a move
+  EXPECT_EQ(PassEndSide(&changes, 1.3, 0.6, Lines()), std::vector<int>{5});
+}
+
+TEST(MapChangesTest, WithoutTheWallMarginAnEndSideAtAWallIsNeverPassedFarEnough) {
+  MapChangeOptions o;
+  o.wall_margin_m = 0;  // the whole 0.5 m asked for; the robot passes 0.25 m of it
+  MapChanges changes(o);
+  changes.Reset(Lines(), SavedTrajectory(), Model(), 0.1);
+  EXPECT_TRUE(PassEndSide(&changes, 2.9, 3.6, Lines()).empty());
+  EXPECT_TRUE(PassEndSide(&changes, 1.3, 0.6, Lines()).empty());
+}
+
+TEST(MapChangesTest, SidesSeenAgainAreNotMissing) {
+  MapChanges changes(MapChangeOptions{});
+  changes.Reset(Lines(), SavedTrajectory(), Model(), 0.1);
+  std::vector<slam::LineFeature> seen = Lines();
+  for (auto& l : seen) ++l.observations;
+  EXPECT_TRUE(PassEndSide(&changes, 2.9, 3.6, seen).empty());
+  EXPECT_TRUE(PassEndSide(&changes, 1.3, 0.6, seen).empty());
+}
+
+}  // namespace
+}  // namespace irslam::control
