@@ -432,20 +432,23 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
   EXPECT_GE(recovered, 5);
 }
 
-// The moved-furniture measurement's fixed-seed subset (irslam-report --reloc 10
+// The moved-furniture measurement's fixed-seed subset (irslam-report --reloc 20
 // --reloc-worlds fig14,fig16,fig20 --reloc-move 0.5; docs/relocalization.md
-// "Moved furniture"): 10 runs each, one piece moved 0.5 m (fig16's two desks
-// each move whole), then a whole cleaning in the saved map. Measured 9, 8 and
-// 8 of 10 models updated (fig14 + fig20: 3/20 before the IR check's
-// probation, 15/20 before its rays were attributed to the saved objects;
-// fig16 5/10 before a piece found moved by the side check was noted with its
-// saved size and a given-up piece of that size was renamed, 7/10 before that
-// check ended the IR check's probation on the piece); the floor keeps the rate
-// from dropping. No run may commit wrong; one fig16 run
-// (seed 11) does not relocalise within 180 s and explores afresh, as designed.
+// "Moved furniture"): 20 runs each (seeds 2-21), one piece moved 0.5 m
+// (fig16's two desks each move whole), then a whole cleaning in the saved map.
+// Measured 18, 16 and 16 of 20 models updated (2026-12-05: fig20 15/20 before
+// a wall-contact piece's contour could start beside a side's end; the first 10
+// seeds: 3/30 before the IR check's probation, 15/30 before its rays were
+// attributed to the saved objects, 22/30 before a piece found moved by the
+// side check was noted with its saved size and a given-up piece of that size
+// was renamed, 24/30 before that check ended the IR check's probation on the
+// piece); the floor keeps the rate from dropping. No run may commit wrong (one
+// did, fig20 seed 20, before a crossing of a furniture side counted less than
+// one of a wall); one fig16 run (seed 11) does not relocalise within 180 s and
+// explores afresh, as designed.
 TEST(RelocTest, FurnitureMovedHalfAMetreIsFoundMovedAndModelledAtItsNewPlace) {
   metrics::RelocOptions ro;
-  ro.runs = 10;
+  ro.runs = 20;
   ro.move_m = 0.5;
   ro.max_time_s = 1500;
   const robot::CoreOptions options = robot::DefaultCoreOptions();
@@ -468,9 +471,9 @@ TEST(RelocTest, FurnitureMovedHalfAMetreIsFoundMovedAndModelledAtItsNewPlace) {
     std::printf("%s: model updated in %d of %zu runs\n", name, here, w.runs.size());
     updated += here;
   }
-  EXPECT_EQ(runs, 30);
-  EXPECT_GE(correct, 29);
-  EXPECT_GE(updated, 23);
+  EXPECT_EQ(runs, 60);
+  EXPECT_GE(correct, 59);
+  EXPECT_GE(updated, 48);
 }
 
 TEST(RelocTest, FurnitureMovedHalfAMetreIsDetectedAndKeepsItsId) {
