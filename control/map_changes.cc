@@ -20,6 +20,9 @@ options::Table<MapChangeOptions> MapChangeKeys() {
        "the part of a side within this of a wall need not have been passed (the robot cannot go there)"},
       {"min_missing_sides", &O::min_missing_sides, 1, 4, "",
        "an object with this many sides not seen again where they were has moved or gone"},
+      {"stretched_m", &O::stretched_m, 0, 10, "m",
+       "a side the SLAM has lengthened by more than this is not where it was either (moved along it) ..."},
+      {"corner_m", &O::corner_m, 0, 1, "m", "... if both its ends were within this of another line"},
   };
   return kKeys;
 }
@@ -50,6 +53,17 @@ void MapChanges::Reset(const std::vector<slam::LineFeature>& lines, const std::v
       if (hi - lo < options_.min_side_m) continue;
       w.first = static_cast<size_t>(std::max(0.0, std::floor((lo - s->a0) / options_.bin_m)));
       w.last = std::min(w.passed.size(), static_cast<size_t>(std::ceil((hi - s->a0) / options_.bin_m)));
+      const auto meets = [&](const Eigen::Vector2d& p) {
+        return std::any_of(lines.begin(), lines.end(), [&](const slam::LineFeature& m) {
+          // A corner: a line across it (a collinear piece beside it is the
+          // same side seen in part, which grows when the pieces merge).
+          if (m.id == id || std::abs(std::cos(m.theta - l->theta)) > 0.5) return false;
+          const Eigen::Vector2d d = m.p1 - m.p0;
+          const double u = std::clamp((p - m.p0).dot(d) / std::max(d.squaredNorm(), 1e-12), 0.0, 1.0);
+          return (m.p0 + u * d - p).norm() <= options_.corner_m;
+        });
+      };
+      w.bounded = meets(l->p0) && meets(l->p1);
       sides_.push_back(std::move(w));
     }
   }
@@ -61,10 +75,31 @@ bool MapChanges::SeenAgain(const Watched& w, const std::vector<slam::LineFeature
   return l == lines.end() || l->observations > w.observations;
 }
 
+bool MapChanges::Stretched(const Watched& w, const std::vector<slam::LineFeature>& lines) const {
+  const auto l = std::find_if(lines.begin(), lines.end(), [&](const auto& x) { return x.id == w.side.id; });
+  return w.bounded && l != lines.end() && (l->p1 - l->p0).norm() > w.side.a1 - w.side.a0 + options_.stretched_m;
+}
+
+int MapChanges::Missing(Watched* w) {
+  w->decided = true;
+  w->missing = true;
+  int missing = 0;
+  for (const auto& o : sides_) missing += o.object == w->object && o.missing;
+  if (missing < options_.min_missing_sides ||
+      std::find(reported_.begin(), reported_.end(), w->object) != reported_.end())
+    return 0;
+  reported_.push_back(w->object);
+  return w->object;
+}
+
 std::vector<int> MapChanges::Step(const Pose2& me, const std::vector<slam::LineFeature>& lines) {
   std::vector<int> moved;
   for (auto& w : sides_) {
     if (w.decided) continue;
+    if (Stretched(w, lines)) {
+      if (const int id = Missing(&w)) moved.push_back(id);
+      continue;
+    }
     const room_geometry::Side& s = w.side;
     const double along = s.horizontal ? me.x : me.y;
     const double across = s.horizontal ? me.y : me.x;
@@ -87,16 +122,11 @@ std::vector<int> MapChanges::Step(const Pose2& me, const std::vector<slam::LineF
     if (share < options_.seen_fraction) continue;
     // Passed in view along most of its length and left behind: seen again or missing.
     if (d > options_.view_max_m + 0.3 || d < 0 || along < s.a0 - 0.3 || along > s.a1 + 0.3) {
-      w.decided = true;
-      w.missing = !SeenAgain(w, lines);
-      if (!w.missing) continue;
-      int missing = 0;
-      for (const auto& o : sides_) missing += o.object == w.object && o.missing;
-      if (missing >= options_.min_missing_sides &&
-          std::find(reported_.begin(), reported_.end(), w.object) == reported_.end()) {
-        reported_.push_back(w.object);
-        moved.push_back(w.object);
+      if (SeenAgain(w, lines)) {
+        w.decided = true;
+        continue;
       }
+      if (const int id = Missing(&w)) moved.push_back(id);
     }
   }
   return moved;

@@ -35,6 +35,14 @@ struct MapChangeOptions {
   // of its length (a piece moved along its wall went unnoticed).
   double wall_margin_m = 0.25;
   int min_missing_sides = 2;      // an object with this many sides missing has moved or gone
+  // A side the SLAM has stretched by more than this (the piece moved along
+  // it: its new place is collinear with the old, and the line grows over
+  // both) is missing too, wherever the robot is; only a side both of whose
+  // ends met a line across it (within corner_m) when watching began: a side
+  // seen in part before (its end in the open, or at a collinear piece of
+  // itself) grows when seen whole.
+  double stretched_m = 0.3;
+  double corner_m = 0.1;
 };
 options::Table<MapChangeOptions> MapChangeKeys();  // [relocalize] too
 
@@ -63,10 +71,14 @@ class MapChanges {
     int observations = 0;  // the line's count when watching began
     std::vector<bool> passed;
     size_t first = 0, last = 0;  // the bins [first, last) asked for (wall_margin_m)
+    bool bounded = false;        // both ends met another line (corner_m)
     bool missing = false;
     bool decided = false;  // seen again, or judged missing
   };
   bool SeenAgain(const Watched& w, const std::vector<slam::LineFeature>& lines) const;
+  bool Stretched(const Watched& w, const std::vector<slam::LineFeature>& lines) const;
+  // w is missing: the object's id if it has now moved (once), else 0.
+  int Missing(Watched* w);
 
   MapChangeOptions options_;
   std::vector<Watched> sides_;

@@ -436,8 +436,10 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
 // --reloc-worlds fig14,fig16,fig20 --reloc-move 0.5; docs/relocalization.md
 // "Moved furniture"): 20 runs each (seeds 2-21), one piece moved 0.5 m
 // (fig16's two desks each move whole), then a whole cleaning in the saved map.
-// Measured 18, 16 and 16 of 20 models updated (2026-12-05: fig20 15/20 before
-// a wall-contact piece's contour could start beside a side's end; the first 10
+// Measured 18, 18 and 17 of 20 models updated (2026-12-05: fig20 15/20 before
+// a wall-contact piece's contour could start beside a side's end, fig16 16/20
+// and fig20 16/20 before a side stretched between its corners counted as not
+// where it was; the first 10
 // seeds: 3/30 before the IR check's probation, 15/30 before its rays were
 // attributed to the saved objects, 22/30 before a piece found moved by the
 // side check was noted with its saved size and a given-up piece of that size
@@ -473,7 +475,7 @@ TEST(RelocTest, FurnitureMovedHalfAMetreIsFoundMovedAndModelledAtItsNewPlace) {
   }
   EXPECT_EQ(runs, 60);
   EXPECT_GE(correct, 59);
-  EXPECT_GE(updated, 48);
+  EXPECT_GE(updated, 51);
 }
 
 TEST(RelocTest, FurnitureMovedHalfAMetreIsDetectedAndKeepsItsId) {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -15,7 +16,12 @@ using testing::Line;
 // A 4 m x 4 m room and a piece against its top wall (y = 4): x 1.6..2.6,
 // y 3.5..4 (the paper's Fig. 20, box 1), its sides seen from outside.
 std::vector<slam::LineFeature> Lines() {
-  return {Line(10, 1.6, 3.5, 1.6, 4.0), Line(11, 1.6, 3.5, 2.6, 3.5), Line(12, 2.6, 3.5, 2.6, 4.0)};
+  return {Line(1, 0, 4, 4, 4), Line(10, 1.6, 3.5, 1.6, 4.0), Line(11, 1.6, 3.5, 2.6, 3.5),
+          Line(12, 2.6, 3.5, 2.6, 4.0)};
+}
+
+slam::LineFeature& Find(std::vector<slam::LineFeature>* lines, int id) {
+  return *std::find_if(lines->begin(), lines->end(), [&](const auto& l) { return l.id == id; });
 }
 
 std::vector<TimedPose> SavedTrajectory() {
@@ -73,6 +79,35 @@ TEST(MapChangesTest, SidesSeenAgainAreNotMissing) {
   for (auto& l : seen) ++l.observations;
   EXPECT_TRUE(PassEndSide(&changes, 2.9, 3.6, seen).empty());
   EXPECT_TRUE(PassEndSide(&changes, 1.3, 0.6, seen).empty());
+}
+
+// Moved 0.5 m along its wall (+x): the long side's new place is collinear
+// with the old one and the SLAM stretches it over both (1.6..3.1), wherever
+// the robot is; with the left end side passed and not seen again, that is two
+// sides not where they were.
+TEST(MapChangesTest, ASideStretchedBetweenItsCornersIsNotWhereItWas) {
+  MapChanges changes(MapChangeOptions{});
+  changes.Reset(Lines(), SavedTrajectory(), Model(), 0.1);
+  std::vector<slam::LineFeature> now = Lines();
+  EXPECT_TRUE(changes.Step({3.5, 1.0, 0}, now).empty());
+  Find(&now, 11) = Line(11, 1.6, 3.5, 3.1, 3.5);
+  EXPECT_TRUE(changes.Step({3.5, 1.0, 0}, now).empty());  // one side
+  EXPECT_EQ(PassEndSide(&changes, 1.3, 0.6, now), std::vector<int>{5});
+}
+
+// A side saved in part (its right end in the open, beside a collinear piece of
+// itself) grows when seen whole: that is no move.
+TEST(MapChangesTest, ASideSavedInPartMayGrow) {
+  std::vector<slam::LineFeature> saved = Lines();
+  Find(&saved, 11) = Line(11, 1.6, 3.5, 2.0, 3.5);
+  saved.push_back(Line(13, 2.05, 3.5, 2.6, 3.5));
+  EnvironmentModel model = Model();
+  model.objects[0].lines.push_back(13);
+  MapChanges changes(MapChangeOptions{});
+  changes.Reset(saved, SavedTrajectory(), model, 0.1);
+  std::vector<slam::LineFeature> now = Lines();  // 11 whole, 13 merged into it
+  EXPECT_TRUE(changes.Step({3.5, 1.0, 0}, now).empty());
+  EXPECT_TRUE(PassEndSide(&changes, 1.3, 0.6, now).empty());  // one side missing only
 }
 
 }  // namespace
