@@ -41,13 +41,14 @@ void BumpMemory::Record(const Pose2& me, uint8_t bumpers) {
     points_.push_back(p);
 }
 
-RangeScan BumpMemory::Apply(const RangeScan& scan, const Pose2& me) const {
+RangeScan BumpMemory::Apply(const RangeScan& scan, const Pose2& me, size_t from) const {
   // What the bumper found is seen from then on by every beam whose path the
   // robot's body would sweep into it: the follower steers round it instead of
   // driving into the same obstacle again.
   RangeScan out = scan;
   const double c = std::cos(me.theta), s = std::sin(me.theta);
-  for (const auto& b : points_) {
+  for (size_t k = from; k < points_.size(); ++k) {
+    const Eigen::Vector2d& b = points_[k];
     if (std::hypot(b.x() - me.x, b.y() - me.y) > options_.bump_reach_m) continue;
     for (int i = 0; i < kNumIrSensors; ++i) {
       const auto& m = mounts_[static_cast<size_t>(i)];

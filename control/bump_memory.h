@@ -39,8 +39,10 @@ class BumpMemory {
   double ContactBearing(uint8_t bumpers) const;
   // Remembers the contact of pressed bumpers at the robot's pose (no-op if none).
   void Record(const Pose2& me, uint8_t bumpers);
-  // The scan with every remembered contact a beam would see added as a reading.
-  RangeScan Apply(const RangeScan& scan, const Pose2& me) const;
+  // The scan with every remembered contact a beam would see added as a reading;
+  // only those recorded from index `from` on (relocalising, the others are in
+  // the map's frame, not the fresh local SLAM's `me` is in).
+  RangeScan Apply(const RangeScan& scan, const Pose2& me, size_t from = 0) const;
   const std::vector<Eigen::Vector2d>& points() const { return points_; }
   // The contacts recorded from index `from` on were in another frame: moves
   // them by t (a point in that frame -> this one). Issue 14: the bumps of a

@@ -23,7 +23,12 @@
 namespace irslam::control {
 
 struct MapChangeOptions {
-  double view_min_m = 0.12;       // a side is in view from this perpendicular distance ...
+  // A side is in view from this perpendicular distance (of the robot's
+  // centre) ...: the sensors sit 5 cm from the centre and read nothing under
+  // 0.2 m, so a side nearer than 0.25 m is not seen; counted as passed in view
+  // (0.12 until 2026-12-05), passes that near made a side that had not moved
+  // "missing" (a kidnap test run lost a saved piece's ids so).
+  double view_min_m = 0.27;
   double view_max_m = 0.55;       // ... up to this (well inside the mapping range)
   double view_bearing_rad = 1.75; // ... and within this of the heading (the sensors look ahead and sideways)
   double bin_m = 0.05;            // a side's length is marked in bins of this

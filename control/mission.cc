@@ -249,8 +249,11 @@ std::optional<RelocalizeProgress> Mission::relocalize() const {
 WheelCommand Mission::StepRelocalize(double t, double dt, const slam::Slam& slam,
                                      const RangeScan& raw_scan, bool bumped) {
   // Follow walls (leaving a free object circled, as in wall following) while
-  // the local SLAM maps; the search runs on each closed window.
-  const Twist tw = follower_.Step(t, bumps_.Apply(raw_scan, slam.pose()), bumped);
+  // the local SLAM maps; the search runs on each closed window. The contacts
+  // remembered before are in the map's frame, not the local SLAM's: only those
+  // of this relocalisation are seen (else the robot, at the local origin, saw
+  // contacts from elsewhere in the room all round it and turned on the spot).
+  const Twist tw = follower_.Step(t, bumps_.Apply(raw_scan, slam.pose(), reloc_bumps_from_), bumped);
   if (loop_.Update(t, follower_.steady(), slam.pose(), slam.distance_m(), follower_.searching()) == LoopEvent::kFreeObject)
     follower_.Leave(t);
   if (const std::optional<slam::PoseHypothesis> d = reloc_.Step(t, slam)) {

@@ -420,16 +420,17 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
                                             << ") - (" << m.p1.transpose() << ") is far from the saved map";
     }
   }
-  // Measured over seeds 40-87 (RELOC_KIDNAP_RUNS=48): recovered 45 of 48
-  // (43 before lines of the mission's own that the IR rays contradict left
-  // the map: runs 27 and 43), no line far from the saved map in any (4 runs
-  // before that and before a map given up was restored without the local
-  // SLAM's lines). Over these seven runs: detected 6, recovered 5 (3 before;
-  // run 1 is never found kidnapped and waits idle, run 16 is not found
-  // again). The floors keep today's rates from dropping.
+  // Measured over seeds 40-87 (RELOC_KIDNAP_RUNS=48): recovered 46 of 48
+  // (45 before relocalising ignored the contacts remembered in the map's
+  // frame: run 16 turned on the spot; 43 before lines of the mission's own
+  // that the IR rays contradict left the map: runs 27 and 43), no line far
+  // from the saved map in any (4 runs before that and before a map given up
+  // was restored without the local SLAM's lines). Over these seven runs:
+  // detected 6, recovered 6 (3 before; run 1 is never found kidnapped and
+  // waits idle). The floors keep today's rates from dropping.
   if (std::getenv("RELOC_KIDNAP_RUNS") || std::getenv("RELOC_KIDNAP_RUN")) return;
   EXPECT_GE(detected, 6);
-  EXPECT_GE(recovered, 5);
+  EXPECT_GE(recovered, 6);
 }
 
 // The moved-furniture measurement's fixed-seed subset (irslam-report --reloc 20

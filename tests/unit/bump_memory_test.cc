@@ -66,5 +66,20 @@ TEST(BumpMemoryTest, FarContactsAndOptionsApply) {
   for (const auto& r : far.range_m) EXPECT_FALSE(r);
 }
 
+// Relocalising, the robot is in a fresh local SLAM's frame: the contacts
+// remembered before (the map's frame) are not shown, those since are.
+TEST(BumpMemoryTest, ContactsBeforeAnIndexAreNotShown) {
+  BumpMemory b({}, CentreMounts(), kRadius);
+  b.Record({0, 0, 0}, 3);  // straight ahead, at 0.19 m (the map's frame)
+  const size_t from = b.points().size();
+  RangeScan empty;
+  EXPECT_TRUE(b.Apply(empty, {0, 0, 0}).range_m[3].has_value());
+  EXPECT_FALSE(b.Apply(empty, {0, 0, 0}, from).range_m[3].has_value());
+  b.Record({0, 0, M_PI / 2}, 3);  // one in the local frame: ahead at +90 deg
+  const RangeScan seen = b.Apply(empty, {0, 0, M_PI / 2}, from);
+  ASSERT_TRUE(seen.range_m[3].has_value());
+  EXPECT_NEAR(*seen.range_m[3], 0.19, 1e-9);
+}
+
 }  // namespace
 }  // namespace irslam::control
