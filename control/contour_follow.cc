@@ -50,6 +50,8 @@ std::vector<ContourStart> ContourStarts(const ObjectModel& target,
   }
   std::sort(sides.begin(), sides.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
+  // Beside the ends too only for a wall-contact object (see the header).
+  const bool ends = target.kind == ObjectKind::kWallContact;
   std::vector<ContourStart> out, ahead, behind;
   for (const auto& [d, side] : sides) {
     const Eigen::Vector2d mid = 0.5 * (side->p0 + side->p1);
@@ -67,11 +69,11 @@ std::vector<ContourStart> ContourStarts(const ObjectModel& target,
     const Eigen::Vector2d dir(n.y(), -n.x());
     const double heading = std::atan2(dir.y(), dir.x());
     out.push_back({mid + follow_distance_m * n, heading});
+    if (!ends) continue;
     const bool p1_ahead = dir.dot(side->p1 - side->p0) > 0;
     ahead.push_back({(p1_ahead ? side->p1 : side->p0) + follow_distance_m * n, heading});
     behind.push_back({(p1_ahead ? side->p0 : side->p1) + follow_distance_m * n, heading});
   }
-  if (target.kind != ObjectKind::kWallContact) return out;
   out.insert(out.end(), ahead.begin(), ahead.end());
   out.insert(out.end(), behind.begin(), behind.end());
   return out;

@@ -3,11 +3,13 @@
 // watched: where the robot passes it in view (on the side it was seen from,
 // within the IR mapping range, the side ahead or beside the robot) its length
 // is marked, and a side passed in view along most of its length but never
-// matched again by the SLAM is missing. An object with enough missing sides
+// matched again by the SLAM is missing; so is a side the SLAM has stretched
+// between its saved corners (the piece moved along it). An object with enough missing sides
 // has moved (or gone): its lines leave the map, and the modeller is told, so
 // that the piece found elsewhere with the same size keeps its id with a note
 // (room_model.h Modeler::NoteMoved), rather than the map silently holding both.
-// Bounded work: O(watched sides) per period. Pure.
+// Bounded work: O(watched sides x map lines) per period (each undecided side's
+// line is looked up for the stretch check). Pure.
 #ifndef IRSLAM_CONTROL_MAP_CHANGES_H_
 #define IRSLAM_CONTROL_MAP_CHANGES_H_
 
