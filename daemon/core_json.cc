@@ -94,14 +94,16 @@ json ObjectJson(const control::ObjectModel& o) {
 }
 
 json LineJson(const slam::LineFeature& l) {
-  return {{"id", l.id},
-          {"rho", l.rho},
-          {"theta", l.theta},
-          {"cov", MatrixJson(l.cov)},
-          {"p0", {l.p0.x(), l.p0.y()}},
-          {"p1", {l.p1.x(), l.p1.y()}},
-          {"length", l.length()},
-          {"observations", l.observations}};
+  json j = {{"id", l.id},
+            {"rho", l.rho},
+            {"theta", l.theta},
+            {"cov", MatrixJson(l.cov)},
+            {"p0", {l.p0.x(), l.p0.y()}},
+            {"p1", {l.p1.x(), l.p1.y()}},
+            {"length", l.length()},
+            {"observations", l.observations}};
+  if (!l.merged.empty()) j["merged"] = l.merged;
+  return j;
 }
 
 json PointsJson(const std::vector<Eigen::Vector2d>& pts) {
@@ -316,6 +318,7 @@ bool ReadLine(MapReader* r, const json& j, const std::string& at, slam::LineFeat
   if ((v = r->Member(j, at, "p0", true))) r->Point(*v, at + ".p0", &l->p0);
   if ((v = r->Member(j, at, "p1", true))) r->Point(*v, at + ".p1", &l->p1);
   if ((v = r->Member(j, at, "observations", false))) r->Int(*v, at + ".observations", &l->observations, 0, INT32_MAX);
+  if ((v = r->Member(j, at, "merged", false))) r->Ids(*v, at + ".merged", &l->merged);
   double length;
   if ((v = r->Member(j, at, "length", false))) r->Number(*v, at + ".length", &length, 1e6);
   return r->ok();

@@ -60,6 +60,7 @@ void CheckLine(const json& l, const std::string& at, Checker* c) {
     c->Require(l.contains(k) && Numbers(l[k], 2), at + "." + k, "not an array of 2 numbers");
   }
   c->Require(!l.contains("length") || l["length"].is_number(), at + ".length", "not a number");
+  c->Require(!l.contains("merged") || Integers(l["merged"]), at + ".merged", "not an array of integers");
 }
 
 void CheckObject(const json& o, const std::string& at, Checker* c) {

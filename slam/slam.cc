@@ -575,6 +575,9 @@ void Slam::MergeOverlapping() {
         const LineFeature gone = lines_[static_cast<size_t>(k)];
         if (saved_frame_ && lines_[static_cast<size_t>(i)].id < first_new_id_ && gone.id >= first_new_id_)
           ++stats_.merges_into_saved;
+        std::vector<int>& aliases = lines_[static_cast<size_t>(i)].merged;
+        if (saved_frame_ && gone.id < first_new_id_) aliases.push_back(gone.id);
+        aliases.insert(aliases.end(), gone.merged.begin(), gone.merged.end());
         ReprojectEndpoints();
         ExtendEndpoints(i, gone.p0, gone.p1);
         lines_[static_cast<size_t>(i)].observations += gone.observations;

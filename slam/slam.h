@@ -115,6 +115,10 @@ struct LineFeature {
   Eigen::Vector2d p1 = Eigen::Vector2d::Zero();
   int observations = 0;
   int collinear_with = 0;  // id of the line this one is a collinear piece of (0: none)
+  // Ids of lines of an adopted saved map merged into this one (§4.5: a wall
+  // saved in pieces, seen whole again). The map's users may know a wall by any
+  // of them; they stay its ids ("merged" in the map file).
+  std::vector<int> merged;
   double length() const { return (p1 - p0).norm(); }
 };
 

@@ -266,12 +266,16 @@ PoseError ErrorInWorld(const Pose2& map_pose, const Pose2& map_to_world, const P
           std::abs(NormalizeAngle(w.theta - truth.theta))};
 }
 
+bool HasLineId(const std::vector<slam::LineFeature>& lines, int id) {
+  return std::any_of(lines.begin(), lines.end(), [&](const slam::LineFeature& l) {
+    return l.id == id || std::find(l.merged.begin(), l.merged.end(), id) != l.merged.end();
+  });
+}
+
 int KeptLineIds(const std::vector<slam::LineFeature>& saved,
                 const std::vector<slam::LineFeature>& out) {
-  std::set<int> ids;
-  for (const auto& l : out) ids.insert(l.id);
   int kept = 0;
-  for (const auto& l : saved) kept += ids.count(l.id) > 0;
+  for (const auto& l : saved) kept += HasLineId(out, l.id);
   return kept;
 }
 

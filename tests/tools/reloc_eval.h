@@ -50,7 +50,10 @@ struct PoseError {
 };
 PoseError ErrorInWorld(const Pose2& map_pose, const Pose2& map_to_world, const Pose2& truth);
 
-// The saved lines' ids still present in `out`.
+// A line of `lines` has this id, as its own or as one merged into it (a saved
+// wall in pieces seen whole again: LineFeature::merged).
+bool HasLineId(const std::vector<slam::LineFeature>& lines, int id);
+// The saved lines' ids still present in `out` (HasLineId).
 int KeptLineIds(const std::vector<slam::LineFeature>& saved,
                 const std::vector<slam::LineFeature>& out);
 // Lines of `out` with an id the saved map does not have that lie on a saved

@@ -104,6 +104,7 @@ robot::MapSnapshot SyntheticMap() {
     l.p0 = {0.1 * id, 0.2};
     l.p1 = {0.3 * id, 1.7};
     l.observations = 3 * id;
+    if (id == 3) l.merged = {9, 11};  // saved pieces of its wall merged into it
     m.lines.push_back(l);
   }
   m.room.walls = {std::vector<int>{1}, {2}, {3}, {4}};
@@ -148,6 +149,9 @@ TEST(MapParseTest, EveryTypedFieldComesBack) {
   EXPECT_EQ(back.pose_cov, m.pose_cov);
   EXPECT_EQ(back.objects[0].note, m.objects[0].note);
   EXPECT_EQ(back.objects[0].open_ends, 2);
+  EXPECT_EQ(back.lines[2].merged, (std::vector<int>{9, 11}));
+  EXPECT_EQ(j["lines"][2]["merged"].dump(), "[9,11]");
+  EXPECT_FALSE(j["lines"][0].contains("merged"));  // only where there are some
   EXPECT_EQ(back.cleaning->cells[1].unreachable, true);
   EXPECT_EQ(back.cleaning->cells[0].route, m.cleaning->cells[0].route);
   EXPECT_EQ(back.cleaning->finished_t, 400.5);
@@ -224,6 +228,8 @@ TEST(MapParseTest, EachMalformedFieldIsOneClearLine) {
       {"/lines/2/cov/0/1", "a", "map.lines[2].cov[0][1]: not a number"},
       {"/lines/2/cov", {{1, 2}}, "map.lines[2].cov: not a 2x2 matrix of numbers"},
       {"/lines/3/p1", {1, 2, 3}, "map.lines[3].p1: not an array of 2 numbers"},
+      {"/lines/2/merged/1", "x", "map.lines[2].merged[1]: not an integer"},
+      {"/lines/2/merged", 9, "map.lines[2].merged: not an array"},
       {"/room/walls/left", {-99}, "map.room.walls.left[0]: out of range [0, 2147483647]"},
       {"/room/walls/middle", {1}, "map.room.walls.middle: not bottom, right, top or left"},
       {"/room/box", {1, 2, 3}, "map.room.box: not an array of 4 numbers"},

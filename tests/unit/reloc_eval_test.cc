@@ -80,6 +80,9 @@ TEST(RelocEvalTest, KeptIdsAndDuplicateLines) {
       Line(25, {1.2, 1.04}, {1.8, 0.98}),  // over object side 7 but 5.7 deg off: not
   };
   EXPECT_EQ(KeptLineIds(saved, out), 2);
+  out[0].merged = {7};  // saved line 7 merged into line 1 (a piece of the same wall): its id kept
+  EXPECT_EQ(KeptLineIds(saved, out), 3);
+  out[0].merged.clear();
   EXPECT_EQ(DuplicateLines(saved, out), 2);
   out[7] = Line(25, {1.2, 1.02}, {1.8, 1.0});  // 1.9 deg, 2 cm: a duplicate
   EXPECT_EQ(DuplicateLines(saved, out), 3);
