@@ -23,6 +23,8 @@ options::Table<MapChangeOptions> MapChangeKeys() {
       {"stretched_m", &O::stretched_m, 0, 10, "m",
        "a side the SLAM has lengthened by more than this is not where it was either (moved along it) ..."},
       {"corner_m", &O::corner_m, 0, 1, "m", "... if both its ends were within this of another line"},
+      {"past_box_moves", &O::past_box_moves, 0, 0, "",
+       "a complete object's side stretched more than stretched_m past its box has moved, without a second side"},
   };
   return kKeys;
 }
@@ -64,6 +66,9 @@ void MapChanges::Reset(const std::vector<slam::LineFeature>& lines, const std::v
         });
       };
       w.bounded = meets(l->p0) && meets(l->p1);
+      w.boxed = options_.past_box_moves && o.complete && o.box.xmax > o.box.xmin && o.box.ymax > o.box.ymin;
+      w.box_lo = s->horizontal ? o.box.xmin : o.box.ymin;
+      w.box_hi = s->horizontal ? o.box.xmax : o.box.ymax;
       sides_.push_back(std::move(w));
     }
   }
@@ -80,12 +85,19 @@ bool MapChanges::Stretched(const Watched& w, const std::vector<slam::LineFeature
   return w.bounded && l != lines.end() && (l->p1 - l->p0).norm() > w.side.a1 - w.side.a0 + options_.stretched_m;
 }
 
-int MapChanges::Missing(Watched* w) {
+bool MapChanges::PastItsBox(const Watched& w, const std::vector<slam::LineFeature>& lines) const {
+  const auto l = std::find_if(lines.begin(), lines.end(), [&](const auto& x) { return x.id == w.side.id; });
+  if (!w.boxed || l == lines.end()) return false;
+  const double a = w.side.horizontal ? l->p0.x() : l->p0.y(), b = w.side.horizontal ? l->p1.x() : l->p1.y();
+  return std::min(a, b) < w.box_lo - options_.stretched_m || std::max(a, b) > w.box_hi + options_.stretched_m;
+}
+
+int MapChanges::Missing(Watched* w, bool conclusive) {
   w->decided = true;
   w->missing = true;
   int missing = 0;
   for (const auto& o : sides_) missing += o.object == w->object && o.missing;
-  if (missing < options_.min_missing_sides ||
+  if ((!conclusive && missing < options_.min_missing_sides) ||
       std::find(reported_.begin(), reported_.end(), w->object) != reported_.end())
     return 0;
   reported_.push_back(w->object);
@@ -96,6 +108,10 @@ std::vector<int> MapChanges::Step(const Pose2& me, const std::vector<slam::LineF
   std::vector<int> moved;
   for (auto& w : sides_) {
     if (w.decided) continue;
+    if (PastItsBox(w, lines)) {
+      if (const int id = Missing(&w, true)) moved.push_back(id);
+      continue;
+    }
     if (Stretched(w, lines)) {
       if (const int id = Missing(&w)) moved.push_back(id);
       continue;

@@ -5,7 +5,9 @@
 // is marked, and a side passed in view along most of its length but never
 // matched again by the SLAM is missing; so is a side the SLAM has stretched
 // between its saved corners (the piece moved along it). An object with enough missing sides
-// has moved (or gone): its lines leave the map, and the modeller is told, so
+// has moved (or gone); so has a complete one whose side the SLAM has stretched
+// past the object's box (a side of a closed box cannot reach beyond its
+// corners: moved along that side, whose saved part may have been short of them): its lines leave the map, and the modeller is told, so
 // that the piece found elsewhere with the same size keeps its id with a note
 // (room_model.h Modeler::NoteMoved), rather than the map silently holding both.
 // Bounded work: O(watched sides x map lines) per period (each undecided side's
@@ -50,6 +52,12 @@ struct MapChangeOptions {
   // itself) grows when seen whole.
   double stretched_m = 0.3;
   double corner_m = 0.1;
+  // A side of a complete object reaching more than stretched_m past the
+  // object's box (its saved model) shows the move alone, without a second
+  // missing side: fig20's box moved along its wall was saved with its long
+  // side short of the far corner (not bounded) and its end sides at the wall
+  // or hidden by the piece's new place, so no second side could go missing.
+  bool past_box_moves = true;
 };
 options::Table<MapChangeOptions> MapChangeKeys();  // [relocalize] too
 
@@ -79,13 +87,17 @@ class MapChanges {
     std::vector<bool> passed;
     size_t first = 0, last = 0;  // the bins [first, last) asked for (wall_margin_m)
     bool bounded = false;        // both ends met another line (corner_m)
+    bool boxed = false;          // a side of a complete object: it lies within ...
+    double box_lo = 0, box_hi = 0;  // ... this extent of the object's box along it
     bool missing = false;
     bool decided = false;  // seen again, or judged missing
   };
   bool SeenAgain(const Watched& w, const std::vector<slam::LineFeature>& lines) const;
   bool Stretched(const Watched& w, const std::vector<slam::LineFeature>& lines) const;
+  bool PastItsBox(const Watched& w, const std::vector<slam::LineFeature>& lines) const;
   // w is missing: the object's id if it has now moved (once), else 0.
-  int Missing(Watched* w);
+  // conclusive: w alone shows the move (PastItsBox).
+  int Missing(Watched* w, bool conclusive = false);
 
   MapChangeOptions options_;
   std::vector<Watched> sides_;
