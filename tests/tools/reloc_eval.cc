@@ -113,8 +113,13 @@ RelocRun::Moved PickMove(const sim::World& world, const robot::MapSnapshot& save
 
 // Scores the move against the run's final map: the piece's saved id at its new
 // place with a note, nothing left where it was.
-void ScoreMove(const sim::World& before, const robot::MapSnapshot& out, const Pose2& map_to_world,
-               const RelocOptions& ro, RelocRun::Moved* m) {
+void ScoreMove(const sim::World& before, const robot::MapSnapshot& saved, const robot::MapSnapshot& out,
+               const Pose2& map_to_world, const RelocOptions& ro, RelocRun::Moved* m) {
+  for (const auto& s : saved.objects) {
+    if (s.id == m->saved_id) continue;
+    const auto o = std::find_if(out.objects.begin(), out.objects.end(), [&](const auto& x) { return x.id == s.id; });
+    m->others_disturbed += o == out.objects.end() || o->note.rfind("moved", 0) == 0;
+  }
   const Eigen::Vector2d old_c = Centre(Bounds(before, m->boxes)), new_c = old_c + Eigen::Vector2d(m->dx, m->dy);
   bool at_new = false, left_at_old = false;
   m->box = "gone";
@@ -203,7 +208,10 @@ RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options,
   // Still off when the run ended (done, or the time limit): never recovered.
   if (wrong_since >= 0) r.confidently_wrong = true;
   r.correct = r.committed && !r.confidently_wrong && !Wrong(r.final_error, ro);
-  if (unmoved && moved.world_index >= 0) ScoreMove(*unmoved, out, map_to_world, ro, &r.moved);
+  if (unmoved && moved.world_index >= 0) ScoreMove(*unmoved, saved, out, map_to_world, ro, &r.moved);
+  // A run that never committed explored afresh: every saved object is "gone"
+  // (new ids), which is no false report.
+  if (!r.committed) r.moved.others_disturbed = 0;
   return r;
 }
 
@@ -461,18 +469,20 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
           "the saved map's object for the piece ends with a \"moved ...\" note. *Model updated*: that object "
           "(same id) ends within "
        << F(ro.moved_match_m * 100, 0)
-       << " cm of the piece's new centre, and no object is left within that of the old one.\n\n";
+       << " cm of the piece's new centre, and no object is left within that of the old one. *Others "
+          "disturbed*: saved objects that did not move but end noted \"moved ...\" or gone from the map "
+          "(false reports; runs that never committed explore afresh and are not counted), and in how many runs.\n\n";
   }
   md << "| world | map | fit rms cm | runs | committed | correct | confidently wrong | time to "
         "relocalise s median | "
         "worst | error at commit cm median / max | heading at commit deg max | max error after "
         "(from commit + 5 s) "
         "cm / deg | saved ids kept | duplicate lines |"
-     << (mv ? " pieces moved | move noted | model updated |" : "") << "\n"
-     << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|" << (mv ? "---|---|---|" : "") << "\n";
+     << (mv ? " pieces moved | move noted | model updated | others disturbed (runs) |" : "") << "\n"
+     << "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|" << (mv ? "---|---|---|---|" : "") << "\n";
   for (const RelocWorld& w : worlds) {
     int committed = 0, correct = 0, wrong = 0, kept = 0, saved = 0, dups = 0, moves = 0, noted = 0,
-        updated = 0;
+        updated = 0, disturbed = 0, disturbed_runs = 0;
     std::vector<double> times, at_commit;
     double heading_max = 0, after_m = 0, after_deg = 0, at_commit_max = 0;
     bool any_after = false;
@@ -486,6 +496,8 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
       moves += r.moved.world_index >= 0;
       noted += r.moved.noted;
       updated += r.moved.updated;
+      disturbed += r.moved.others_disturbed;
+      disturbed_runs += r.moved.others_disturbed > 0;
       if (!r.committed) continue;
       times.push_back(r.relocalize_s);
       at_commit.push_back(r.at_commit.position_m * 100);
@@ -507,15 +519,18 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
        << (any ? F(heading_max) : "-") << " | "
        << (any_after ? F(after_m) + " / " + F(after_deg) : "-") << " | " << kept << "/" << saved
        << " | " << dups << " |";
-    if (mv) md << " " << moves << " | " << noted << "/" << moves << " | " << updated << "/" << moves << " |";
+    if (mv)
+      md << " " << moves << " | " << noted << "/" << moves << " | " << updated << "/" << moves << " | " << disturbed
+         << " (" << disturbed_runs << ") |";
     md << "\n";
   }
   md << "\n## Every run\n\n"
      << "| world | seed | start (world) | end | committed at s (time to relocalise) | hypotheses | "
         "attempts | error at commit cm / deg | "
         "final error cm / deg | confidently wrong | ids kept | duplicates |"
-     << (mv ? " piece moved (world index: saved id, by) | noted | updated | its box centre at the end |" : "")
-     << "\n|---|---|---|---|---|---|---|---|---|---|---|---|" << (mv ? "---|---|---|---|" : "") << "\n";
+     << (mv ? " piece moved (world index: saved id, by) | noted | updated | its box centre at the end | others disturbed |"
+            : "")
+     << "\n|---|---|---|---|---|---|---|---|---|---|---|---|" << (mv ? "---|---|---|---|---|" : "") << "\n";
   for (const RelocWorld& w : worlds) {
     for (const RelocRun& r : w.runs) {
       md << "| " << w.world << " | " << r.seed << " | " << F(r.start.x, 2) << ", "
@@ -535,7 +550,7 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
       if (mv) {
         const RelocRun::Moved& m = r.moved;
         if (m.world_index < 0) {
-          md << " none could be moved | - | - | - |";
+          md << " none could be moved | - | - | - | - |";
         } else {
           std::string boxes;
           for (size_t k : m.boxes) {
@@ -543,7 +558,8 @@ std::string RelocMarkdown(const std::vector<RelocWorld>& worlds, const RelocOpti
             boxes += std::to_string(k);
           }
           md << " " << boxes << ": " << m.saved_id << ", " << F(m.dx, 2) << ", " << F(m.dy, 2) << " | "
-             << (m.noted ? "yes" : "no") << " | " << (m.updated ? "yes" : "no") << " | " << m.box << " |";
+             << (m.noted ? "yes" : "no") << " | " << (m.updated ? "yes" : "no") << " | " << m.box << " | "
+             << m.others_disturbed << " |";
         }
       }
       md << "\n";

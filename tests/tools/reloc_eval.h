@@ -96,6 +96,9 @@ struct RelocRun {
     bool noted = false;    // the object with saved_id carries a "moved ..." note
     bool updated = false;  // saved_id at the new place, and no object left at the old one
     std::string box;       // saved_id's box at the end (world frame centre), or "gone"
+    // Saved objects that did not move but end noted "moved ..." or gone from
+    // the map: false reports (the side or IR check judged them moved).
+    int others_disturbed = 0;
   } moved;
 };
 
