@@ -74,20 +74,17 @@ void MapChanges::Reset(const std::vector<slam::LineFeature>& lines, const std::v
   }
 }
 
-bool MapChanges::SeenAgain(const Watched& w, const std::vector<slam::LineFeature>& lines) const {
-  const auto l = std::find_if(lines.begin(), lines.end(), [&](const auto& x) { return x.id == w.side.id; });
+bool MapChanges::SeenAgain(const Watched& w, const slam::LineFeature* l) const {
   // Merged into another line (seen and joined): not missing.
-  return l == lines.end() || l->observations > w.observations;
+  return l == nullptr || l->observations > w.observations;
 }
 
-bool MapChanges::Stretched(const Watched& w, const std::vector<slam::LineFeature>& lines) const {
-  const auto l = std::find_if(lines.begin(), lines.end(), [&](const auto& x) { return x.id == w.side.id; });
-  return w.bounded && l != lines.end() && (l->p1 - l->p0).norm() > w.side.a1 - w.side.a0 + options_.stretched_m;
+bool MapChanges::Stretched(const Watched& w, const slam::LineFeature* l) const {
+  return w.bounded && l != nullptr && (l->p1 - l->p0).norm() > w.side.a1 - w.side.a0 + options_.stretched_m;
 }
 
-bool MapChanges::PastItsBox(const Watched& w, const std::vector<slam::LineFeature>& lines) const {
-  const auto l = std::find_if(lines.begin(), lines.end(), [&](const auto& x) { return x.id == w.side.id; });
-  if (!w.boxed || l == lines.end()) return false;
+bool MapChanges::PastItsBox(const Watched& w, const slam::LineFeature* l) const {
+  if (!w.boxed || l == nullptr) return false;
   const double a = w.side.horizontal ? l->p0.x() : l->p0.y(), b = w.side.horizontal ? l->p1.x() : l->p1.y();
   return std::min(a, b) < w.box_lo - options_.stretched_m || std::max(a, b) > w.box_hi + options_.stretched_m;
 }
@@ -108,11 +105,14 @@ std::vector<int> MapChanges::Step(const Pose2& me, const std::vector<slam::LineF
   std::vector<int> moved;
   for (auto& w : sides_) {
     if (w.decided) continue;
-    if (PastItsBox(w, lines)) {
+    // The side's line now (nullptr: merged into another), looked up once.
+    const auto found = std::find_if(lines.begin(), lines.end(), [&](const auto& x) { return x.id == w.side.id; });
+    const slam::LineFeature* line = found == lines.end() ? nullptr : &*found;
+    if (PastItsBox(w, line)) {
       if (const int id = Missing(&w, true)) moved.push_back(id);
       continue;
     }
-    if (Stretched(w, lines)) {
+    if (Stretched(w, line)) {
       if (const int id = Missing(&w)) moved.push_back(id);
       continue;
     }
@@ -138,7 +138,7 @@ std::vector<int> MapChanges::Step(const Pose2& me, const std::vector<slam::LineF
     if (share < options_.seen_fraction) continue;
     // Passed in view along most of its length and left behind: seen again or missing.
     if (d > options_.view_max_m + 0.3 || d < 0 || along < s.a0 - 0.3 || along > s.a1 + 0.3) {
-      if (SeenAgain(w, lines)) {
+      if (SeenAgain(w, line)) {
         w.decided = true;
         continue;
       }

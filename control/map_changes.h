@@ -4,14 +4,15 @@
 // within the IR mapping range, the side ahead or beside the robot) its length
 // is marked, and a side passed in view along most of its length but never
 // matched again by the SLAM is missing; so is a side the SLAM has stretched
-// between its saved corners (the piece moved along it). An object with enough missing sides
-// has moved (or gone); so has a complete one whose side the SLAM has stretched
-// past the object's box (a side of a closed box cannot reach beyond its
-// corners: moved along that side, whose saved part may have been short of them): its lines leave the map, and the modeller is told, so
-// that the piece found elsewhere with the same size keeps its id with a note
+// between its saved corners (the piece moved along it). An object with enough
+// missing sides has moved (or gone); so has a complete one whose side the SLAM
+// has stretched past the object's box (a side of a closed box cannot reach
+// beyond its corners: moved along that side, whose saved part may have been
+// short of them). Its lines leave the map, and the modeller is told, so that
+// the piece found elsewhere with the same size keeps its id with a note
 // (room_model.h Modeler::NoteMoved), rather than the map silently holding both.
 // Bounded work: O(watched sides x map lines) per period (each undecided side's
-// line is looked up for the stretch check). Pure.
+// line is looked up once). Pure.
 #ifndef IRSLAM_CONTROL_MAP_CHANGES_H_
 #define IRSLAM_CONTROL_MAP_CHANGES_H_
 
@@ -92,9 +93,10 @@ class MapChanges {
     bool missing = false;
     bool decided = false;  // seen again, or judged missing
   };
-  bool SeenAgain(const Watched& w, const std::vector<slam::LineFeature>& lines) const;
-  bool Stretched(const Watched& w, const std::vector<slam::LineFeature>& lines) const;
-  bool PastItsBox(const Watched& w, const std::vector<slam::LineFeature>& lines) const;
+  // l: w's line in the map now, nullptr if it was merged into another.
+  bool SeenAgain(const Watched& w, const slam::LineFeature* l) const;
+  bool Stretched(const Watched& w, const slam::LineFeature* l) const;
+  bool PastItsBox(const Watched& w, const slam::LineFeature* l) const;
   // w is missing: the object's id if it has now moved (once), else 0.
   // conclusive: w alone shows the move (PastItsBox).
   int Missing(Watched* w, bool conclusive = false);

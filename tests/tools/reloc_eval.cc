@@ -113,13 +113,8 @@ RelocRun::Moved PickMove(const sim::World& world, const robot::MapSnapshot& save
 
 // Scores the move against the run's final map: the piece's saved id at its new
 // place with a note, nothing left where it was.
-void ScoreMove(const sim::World& before, const robot::MapSnapshot& saved, const robot::MapSnapshot& out,
-               const Pose2& map_to_world, const RelocOptions& ro, RelocRun::Moved* m) {
-  for (const auto& s : saved.objects) {
-    if (s.id == m->saved_id) continue;
-    const auto o = std::find_if(out.objects.begin(), out.objects.end(), [&](const auto& x) { return x.id == s.id; });
-    m->others_disturbed += o == out.objects.end() || o->note.rfind("moved", 0) == 0;
-  }
+void ScoreMove(const sim::World& before, const robot::MapSnapshot& out, const Pose2& map_to_world,
+               const RelocOptions& ro, RelocRun::Moved* m) {
   const Eigen::Vector2d old_c = Centre(Bounds(before, m->boxes)), new_c = old_c + Eigen::Vector2d(m->dx, m->dy);
   bool at_new = false, left_at_old = false;
   m->box = "gone";
@@ -132,6 +127,17 @@ void ScoreMove(const sim::World& before, const robot::MapSnapshot& saved, const 
     m->box = F(c.x(), 2) + ", " + F(c.y(), 2);
   }
   m->updated = at_new && !left_at_old;
+}
+
+// Saved objects other than `moved_id` that end noted "moved ..." or gone from `out`.
+int OthersDisturbed(const robot::MapSnapshot& saved, const robot::MapSnapshot& out, int moved_id) {
+  int n = 0;
+  for (const auto& s : saved.objects) {
+    if (s.id == moved_id) continue;
+    const auto o = std::find_if(out.objects.begin(), out.objects.end(), [&](const auto& x) { return x.id == s.id; });
+    n += o == out.objects.end() || o->note.rfind("moved", 0) == 0;
+  }
+  return n;
 }
 
 // One run from `start` in `base`; unmoved: the world before a piece was moved
@@ -208,10 +214,12 @@ RelocRun RunOne(const sim::World& base, const robot::CoreOptions& options,
   // Still off when the run ended (done, or the time limit): never recovered.
   if (wrong_since >= 0) r.confidently_wrong = true;
   r.correct = r.committed && !r.confidently_wrong && !Wrong(r.final_error, ro);
-  if (unmoved && moved.world_index >= 0) ScoreMove(*unmoved, saved, out, map_to_world, ro, &r.moved);
-  // A run that never committed explored afresh: every saved object is "gone"
-  // (new ids), which is no false report.
-  if (!r.committed) r.moved.others_disturbed = 0;
+  if (unmoved && moved.world_index >= 0) {
+    ScoreMove(*unmoved, out, map_to_world, ro, &r.moved);
+    // A run that never committed explored afresh: every saved object is
+    // "gone" (new ids), which is no false report.
+    if (r.committed) r.moved.others_disturbed = OthersDisturbed(saved, out, moved.saved_id);
+  }
   return r;
 }
 
