@@ -32,6 +32,7 @@ GoToOptions CleaningGoTo(GoToOptions g, const CleaningOptions& c) {
   g.front_stop_m = 0.1;
   g.boxed_in_contacts_m = c.boxed_in_contacts_m;
   g.under_body_contacts_m = c.under_body_contacts_m;
+  g.boxed_in_corners = c.boxed_in_corners;
   return g;
 }
 

@@ -60,6 +60,9 @@ struct CleaningOptions {
   // closer than under_body_contacts_m to the robot (stale: it is there).
   double boxed_in_contacts_m = 0.3;
   double under_body_contacts_m = 0.14;
+  // ... and no way found: plan again with sides extended only to their corners
+  // (GoToOptions::boxed_in_corners).
+  bool boxed_in_corners = true;
   int max_goal_failures = 4;       // route points given up in a row: the rest of the cell is given up
   double max_time_s = 3600;        // cleaning plus going home, robot time
   double home_tolerance_m = 0.05;  // home is reached within this

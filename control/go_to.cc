@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <optional>
 
 namespace irslam::control {
 
@@ -86,14 +87,55 @@ options::Table<GoToOptions> GoToKeys() {
   return kKeys;
 }
 
+namespace {
+
+double Cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// How far past end e (outward direction out, a unit vector) the side's line
+// meets `other` at a corner: nullopt if it does not within `reach` of e and
+// of other, or the two are within 30 deg of parallel.
+std::optional<double> CornerAhead(const Eigen::Vector2d& e, const Eigen::Vector2d& out,
+                                  const slam::LineFeature& other, double reach) {
+  const Eigen::Vector2d d = other.p1 - other.p0;
+  const double len = d.norm();
+  if (len < 1e-9) return std::nullopt;
+  const Eigen::Vector2d u = d / len;
+  const double sin_angle = Cross(out, u);
+  if (std::abs(sin_angle) < 0.5) return std::nullopt;
+  // e + s out = other.p0 + r u
+  const Eigen::Vector2d w = other.p0 - e;
+  const double s = Cross(w, u) / sin_angle;
+  const double r = Cross(w, out) / sin_angle;
+  if (s < -reach || s > reach || r < -reach || r > len + reach) return std::nullopt;
+  return std::max(0.0, s);
+}
+
+}  // namespace
+
+void ExtendedSides(const std::vector<slam::LineFeature>& lines, double extension_m, bool to_corners,
+                   std::vector<Obstacle>* sides) {
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const slam::LineFeature& l = lines[i];
+    const Eigen::Vector2d d = (l.p1 - l.p0).normalized();
+    double ext0 = extension_m, ext1 = extension_m;
+    for (size_t j = 0; to_corners && extension_m > 0 && j < lines.size(); ++j) {
+      if (j == i) continue;
+      if (auto s = CornerAhead(l.p0, -d, lines[j], extension_m)) ext0 = std::min(ext0, *s);
+      if (auto s = CornerAhead(l.p1, d, lines[j], extension_m)) ext1 = std::min(ext1, *s);
+    }
+    sides->push_back({l.p0 - ext0 * d, l.p1 + ext1 * d});
+  }
+}
+
 bool GoTo::TryGoal(double t, const Eigen::Vector2d& goal, double heading, bool align,
                    const slam::Slam& slam, const BumpMemory& bumps) {
   p1_ = goal;
   p1_heading_ = heading;
   align_ = align;
   drop_contacts_ = false;
+  to_corners_ = false;
   PathPlanner::Progress p = Replan(t, slam, RangeScan{}, bumps);
-  if (p == PathPlanner::Progress::kFailed && DropNearContacts(slam, bumps)) p = Replan(t, slam, RangeScan{}, bumps);
+  while (p == PathPlanner::Progress::kFailed && Loosen(slam, bumps)) p = Replan(t, slam, RangeScan{}, bumps);
   // Still searching: no path yet (not the last goal's either): Step waits for it.
   if (p == PathPlanner::Progress::kRunning) path_.clear();
   return p != PathPlanner::Progress::kFailed;
@@ -136,12 +178,8 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
   const auto& o = options_;
   std::vector<Obstacle>& obstacles = plan_obstacles_;
   obstacles.clear();
-  // Mapped sides are seen shorter than they are (their ends are passed on
-  // corner arcs): plan around them extended at each end.
-  for (const auto& l : slam.lines()) {
-    const Eigen::Vector2d d = (l.p1 - l.p0).normalized();
-    obstacles.push_back({l.p0 - o.line_extension_m * d, l.p1 + o.line_extension_m * d});
-  }
+  // Mapped sides, extended at their ends (ExtendedSides).
+  ExtendedSides(slam.lines(), o.line_extension_m, to_corners_, &obstacles);
   const Pose2 me = slam.pose();
   for (const auto& b : bumps.points()) {
     if ((b - Eigen::Vector2d(me.x, me.y)).norm() < o.under_body_contacts_m) continue;
@@ -168,6 +206,13 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
   if (clock_) planning_ns_ += clock_() - t0;
   if (o.plan_cells_per_pop > 0) *Budget(t) -= planner_.start_cells() / o.plan_cells_per_pop;
   return p == PathPlanner::Progress::kRunning ? ContinuePlan(t) : Ended(p);
+}
+
+bool GoTo::Loosen(const slam::Slam& slam, const BumpMemory& bumps) {
+  if (DropNearContacts(slam, bumps)) return true;
+  if (to_corners_ || !options_.boxed_in_corners) return false;
+  to_corners_ = true;
+  return true;
 }
 
 bool GoTo::DropNearContacts(const slam::Slam& slam, const BumpMemory& bumps) {
@@ -402,10 +447,10 @@ GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_s
     return blocked || path_.empty() ? Drive({0, 0}) : Drive(Pursue(me, front));
   }
   if (plan) {
-    if (*plan == PathPlanner::Progress::kFailed && DropNearContacts(slam, bumps)) {
-      // Boxed in by remembered contacts (a search longer than a period fails
-      // here, not in TryGoal; a replan on the way fails here too): plan again
-      // without those close by.
+    while (*plan == PathPlanner::Progress::kFailed && Loosen(slam, bumps)) {
+      // Boxed in by remembered contacts or extended sides (a search longer
+      // than a period fails here, not in TryGoal; a replan on the way fails
+      // here too): plan again leaving them out.
       plan = Replan(t, slam, plan_scan, bumps);
       if (*plan == PathPlanner::Progress::kRunning) {
         return blocked || path_.empty() ? Drive({0, 0}) : Drive(Pursue(me, front));

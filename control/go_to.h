@@ -69,6 +69,13 @@ struct GoToOptions {
       0.6;  // speed limit near the goal: gain * distance + approach_min_speed_mps
   double approach_min_speed_mps = 0.03;
   double line_extension_m = 0.15;  // mapped sides are planned around extended this much at each end
+  // No way found: plan again (for the rest of this goal) with the ends of
+  // sides that meet another side at a corner extended only to that corner
+  // (ExtendedSides). Not always: the extension past convex corners also keeps
+  // the robot off corners it passes (extended only to the corners in every
+  // plan, the cleaning campaign touched 27 % more). Off while exploring (no
+  // key; cleaning sets it, CleaningOptions::boxed_in_corners).
+  bool boxed_in_corners = false;
   double hard_clearance_m = 0.02;  // never plan closer than robot radius + this
   double keep_path_ratio = 1.25;   // keep the current path while shorter than ratio * new + slack
   double keep_path_slack_m = 0.2;
@@ -101,6 +108,18 @@ struct GoToOptions {
   PlannerOptions planner;  // grid; inflation and hard distance come from the above
 };
 options::Table<GoToOptions> GoToKeys();
+
+// The mapped sides as the planner's obstacles, each extended by extension_m
+// at both ends: sides are seen shorter than they are (their ends are passed on
+// corner arcs). to_corners: an end that meets another side at a corner - the
+// two lines cross at more than 30 deg, within extension_m of this end and of
+// the other side (its end, or on it) - is extended only as far as that corner
+// (not at all if it already reaches it). Past a convex corner lies free floor:
+// extended there, the sides of two pieces of furniture closed the way between
+// them, and a robot that had driven in found no way out.
+// Appended to *sides (its buffer reused from one plan to the next).
+void ExtendedSides(const std::vector<slam::LineFeature>& lines, double extension_m, bool to_corners,
+                   std::vector<Obstacle>* sides);
 
 // Rotation of a vector by angle a (frames differ by the map rotation).
 inline Eigen::Vector2d RotateVector(const Eigen::Vector2d& v, double a) {
@@ -188,6 +207,10 @@ class GoTo {
   bool DropNearContacts(const slam::Slam& slam, const BumpMemory& bumps);
   // A remembered contact within boxed_in_contacts_m of at (never when it is 0).
   bool WithinDropped(const Eigen::Vector2d& contact, const Eigen::Vector2d& at) const;
+  // No way found: the next plan of this goal may leave more out - first the
+  // contacts close by (DropNearContacts), then the extensions past corners
+  // (boxed_in_corners). False when nothing is left to leave out.
+  bool Loosen(const slam::Slam& slam, const BumpMemory& bumps);
 
   GoToOptions options_;
   double radius_m_;
@@ -223,6 +246,8 @@ class GoTo {
   // drop_at_ (set by DropNearContacts when boxed in there).
   bool drop_contacts_ = false;
   Eigen::Vector2d drop_at_ = Eigen::Vector2d::Zero();
+  // This goal's plans extend sides only to their corners (Loosen).
+  bool to_corners_ = false;
   double progress_t_ = -1;  // got go_to_progress_m further at this time ...
   Eigen::Vector2d progress_at_ = Eigen::Vector2d::Zero();  // ... from here
 };

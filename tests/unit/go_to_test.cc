@@ -10,6 +10,7 @@
 #include <random>
 
 #include "robot/robot_core.h"
+#include "tests/testing/lines.h"
 
 namespace irslam::control {
 namespace {
@@ -130,6 +131,83 @@ TEST(GoToTest, BoxedInByItsOwnContactsPlansAgainWithoutTheNearOnes) {
   ASSERT_GT(r.bumps.points().size(), 190u);
   GoTo g({}, r.o.slam.geometry, r.o.slam.mounts);
   EXPECT_FALSE(g.TryGoal(0, {2, 0}, 0, false, r.slam, r.bumps));
+}
+
+// Sides are planned round extended at both ends (they are seen short); an
+// end that meets another side at a corner only as far as that corner.
+TEST(GoToTest, ExtendedSidesStopAtTheCornersTheyMeet) {
+  // A 1 m box whose sides were seen 5 cm short of each corner, one side that
+  // overshoots its corner by 3 cm, and a lone side.
+  const std::vector<slam::LineFeature> lines = {
+      testing::Line(1, 0.05, 0, 0.95, 0),   testing::Line(2, 1, 0.05, 1, 0.95),
+      testing::Line(3, 0.95, 1, 0.05, 1),   testing::Line(4, 0, 1.03, 0, 0.05),
+      testing::Line(5, 3, 0, 3, 1),
+  };
+  std::vector<Obstacle> plain, clipped;
+  ExtendedSides(lines, 0.15, false, &plain);
+  ExtendedSides(lines, 0.15, true, &clipped);
+  ASSERT_EQ(plain.size(), 5u);
+  ASSERT_EQ(clipped.size(), 5u);
+  EXPECT_NEAR((plain[0].a - Eigen::Vector2d(-0.10, 0)).norm(), 0, 1e-9);
+  EXPECT_NEAR((plain[0].b - Eigen::Vector2d(1.10, 0)).norm(), 0, 1e-9);
+  // To the corners, 5 cm each.
+  EXPECT_NEAR((clipped[0].a - Eigen::Vector2d(0, 0)).norm(), 0, 1e-9);
+  EXPECT_NEAR((clipped[0].b - Eigen::Vector2d(1, 0)).norm(), 0, 1e-9);
+  EXPECT_NEAR((clipped[1].a - Eigen::Vector2d(1, 0)).norm(), 0, 1e-9);
+  EXPECT_NEAR((clipped[1].b - Eigen::Vector2d(1, 1)).norm(), 0, 1e-9);
+  // Past its corner already: not extended there; to the corner at the other end.
+  EXPECT_NEAR((clipped[3].a - Eigen::Vector2d(0, 1.03)).norm(), 0, 1e-9);
+  EXPECT_NEAR((clipped[3].b - Eigen::Vector2d(0, 0)).norm(), 0, 1e-9);
+  // Nothing meets the lone side (it is parallel to the box's right side).
+  EXPECT_NEAR((clipped[4].a - Eigen::Vector2d(3, -0.15)).norm(), 0, 1e-9);
+  EXPECT_NEAR((clipped[4].b - Eigen::Vector2d(3, 1.15)).norm(), 0, 1e-9);
+}
+
+// The robot stands in a pocket whose way out is a 56 cm gap between the
+// convex corners of two boxes. Extended 15 cm past those corners their sides
+// leave 26 cm, and no way was found: a cleaning that began there (generated
+// world 1025 of the clean campaign, after contour following into the pocket)
+// gave up every cell at once. With boxed_in_corners a failed plan is tried
+// again with the sides extended only to their corners.
+TEST(GoToTest, InAPocketBetweenConvexCornersPlansAgainWithSidesEndingAtTheirCorners) {
+  for (const bool corners : {true, false}) {
+    Rig r;
+    std::vector<slam::LineFeature> lines = {
+        testing::Line(1, -2, -3, 2, -3), testing::Line(2, 2, -3, 2, 1), testing::Line(3, 2, 1, -2, 1),
+        testing::Line(4, -2, 1, -2, -3),
+    };
+    int id = 5;
+    for (const double s : {-1.0, 1.0}) {  // the boxes left and right of the gap
+      lines.push_back(testing::Line(id++, 2 * s, -0.5, 0.28 * s, -0.5));
+      lines.push_back(testing::Line(id++, 0.28 * s, -0.5, 0.28 * s, -0.8));
+      lines.push_back(testing::Line(id++, 0.28 * s, -0.8, 2 * s, -0.8));
+    }
+    r.slam.AdoptMap({0, 0, 0}, lines);
+    GoToOptions o;
+    o.boxed_in_corners = corners;
+    GoTo g(o, r.o.slam.geometry, r.o.slam.mounts);
+    const bool planned = g.TryGoal(0, {0, -2}, 0, false, r.slam, r.bumps);
+    if (!corners) {
+      EXPECT_FALSE(planned) << "the extended sides close the gap";
+      continue;
+    }
+    ASSERT_TRUE(planned);
+    ASSERT_FALSE(g.path().empty());
+    EXPECT_NEAR((g.path().back() - Eigen::Vector2d(0, -2)).norm(), 0, 1e-9);
+    // Through the gap: the path's points between the boxes' rows stay in it.
+    for (size_t k = 1; k < g.path().size(); ++k) {
+      const Eigen::Vector2d a = g.path()[k - 1], b = g.path()[k];
+      if ((a.y() + 0.65) * (b.y() + 0.65) > 0) continue;
+      const double x = a.x() + (b.x() - a.x()) * (-0.65 - a.y()) / (b.y() - a.y());
+      EXPECT_LT(std::abs(x), 0.28 - 0.17) << "crosses the boxes' row at x " << x;
+    }
+    // Its replans keep the sides to their corners: it drives.
+    g.Begin(0);
+    for (double t = 0; t <= 4; t += 0.5) {
+      const GoTo::Result res = g.Step(t, r.slam, RangeScan{}, 0, r.bumps, r.follower);
+      ASSERT_EQ(res.status, GoTo::Status::kDriving) << t;
+    }
+  }
 }
 
 TEST(GoToTest, BoxedInFoundOnlyByALongSearchPlansAgainWithoutTheNearContacts) {
