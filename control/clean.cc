@@ -49,6 +49,7 @@ void Clean::Reset() {
   stage_ = PlanStage::kNone;
   resume_.reset();
   resumed_cells_ = 0;
+  replanned_same_ = false;
 }
 
 Clean::Clean(CleaningOptions options, GoToOptions go_to, const RobotGeometry& geometry,
@@ -74,7 +75,32 @@ std::optional<bool> LanesAlongX(const CleaningProgress& p) {
   return along_x > along_y;
 }
 
+// Edges of `a` each within tol of `b`'s.
+bool NearBox(const Box& a, const Box& b, double tol) {
+  return std::abs(a.xmin - b.xmin) <= tol && std::abs(a.xmax - b.xmax) <= tol && std::abs(a.ymin - b.ymin) <= tol &&
+         std::abs(a.ymax - b.ymax) <= tol;
+}
+
 }  // namespace
+
+bool SameModel(const CleaningProgress::PlanInputs& planned, const CleaningProgress::PlanInputs& now,
+               double tolerance_m) {
+  if (tolerance_m <= 0 || planned.objects.size() != now.objects.size()) return false;
+  if (!NearBox(planned.room, now.room, tolerance_m)) return false;
+  // Greedy one-to-one pairing (boxes of one model lie apart by more than any
+  // sensible tolerance, so the first near one is the one); O(objects^2).
+  std::vector<bool> taken(planned.objects.size(), false);
+  for (const Box& b : now.objects) {
+    bool found = false;
+    for (size_t i = 0; i < planned.objects.size() && !found; ++i) {
+      if (taken[i] || !NearBox(planned.objects[i], b, tolerance_m)) continue;
+      taken[i] = true;
+      found = true;
+    }
+    if (!found) return false;
+  }
+  return true;
+}
 
 void Clean::Begin(double t, const slam::Slam& slam, const EnvironmentModel& m, const BumpMemory& bumps,
                   std::optional<CleaningProgress> resume) {
@@ -85,24 +111,35 @@ void Clean::Begin(double t, const slam::Slam& slam, const EnvironmentModel& m, c
   plan_ = {};
   resume_ = std::move(resume);
   resumed_cells_ = 0;
+  replanned_same_ = false;
+  inputs_.reset();
   match_ = {};
   if (resume_) {
     // Until planned, the cells done before are the progress (a stop now keeps them).
     progress_.cells = resume_->cells;
     progress_.cells_done = resume_->cells_done;
     progress_.cells_total = resume_->cells_total;
+    progress_.planned = resume_->planned;
   }
   stage_ = PlanStage::kCells;
   if (m.room.box) {
     const double rot = slam.map_rotation();
-    std::vector<Box> objects;
-    for (const auto& o : m.objects) objects.push_back(o.box);
-    std::vector<Eigen::Vector2d> contacts;
-    for (const auto& p : bumps.points()) contacts.push_back(RotateVector(p, rot));
+    CleaningProgress::PlanInputs in;
+    in.room = *m.room.box;
+    for (const auto& o : m.objects) in.objects.push_back(o.box);
+    // The latest contacts, as many as the planner takes.
+    const auto& points = bumps.points();
+    const size_t keep = std::min(points.size(), static_cast<size_t>(std::max(0, options_.max_bump_obstacles)));
+    for (size_t k = points.size() - keep; k < points.size(); ++k) in.contacts.push_back(RotateVector(points[k], rot));
+    if (resume_ && resume_->planned && SameModel(*resume_->planned, in, options_.resume_same_model_m)) {
+      in = *resume_->planned;  // nothing moved: the same cells as the plan stopped
+      replanned_same_ = true;
+    }
     const Pose2 me = slam.map_pose();
-    room_ = *m.room.box;
-    planner_.Start(room_, objects, contacts, {me.x, me.y}, radius_m_, options_,
+    room_ = in.room;
+    planner_.Start(room_, in.objects, in.contacts, {me.x, me.y}, radius_m_, options_,
                    resume_ ? LanesAlongX(*resume_) : std::nullopt);
+    inputs_ = std::move(in);  // the progress's once its cells are this plan's (kCells)
     stage_ = PlanStage::kCoverage;
   }
   cell_ = 0;
@@ -161,6 +198,7 @@ double Clean::PlanStep(double t) {
       }
       progress_.cells_done = 0;
       progress_.cells_total = static_cast<int>(plan_.order.size());
+      progress_.planned = inputs_;
       progress_.total_m2 = grid_.total_m2();
       stage_next_ = 0;
       if (resume_ && !progress_.cells.empty()) {
@@ -259,8 +297,8 @@ bool Overlaps(const Box& a, const Box& b) {
 }  // namespace
 
 double Clean::ResumeStep(const CleaningProgress& before) {
-  // The plan may be cut differently from the one stopped (contacts are not
-  // saved; an object seen again may have changed): a cell is done when most of
+  // The plan may be cut differently from the one stopped (an object seen
+  // again has changed, or a map saved without its plan's inputs): a cell is done when most of
   // it lies inside the cells done then, sampled on a lattice twice the
   // coverage grid's cell, a column of it per step.
   auto& pc = progress_.cells[stage_next_];

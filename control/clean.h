@@ -63,7 +63,24 @@ struct CleaningProgress {
     bool unreachable = false;
   };
   std::vector<Cell> cells;
+  // What the plan was made from (map frame): the room, the objects' boxes and
+  // the remembered contacts it went round (the latest max_bump_obstacles). A
+  // resume plans from these again while the model has not moved
+  // (CleaningOptions::resume_same_model_m), so it cuts the same cells. None:
+  // not planned yet, or a map saved without them.
+  struct PlanInputs {
+    Box room;
+    std::vector<Box> objects;
+    std::vector<Eigen::Vector2d> contacts;
+  };
+  std::optional<PlanInputs> planned;
 };
+
+// The model now (`now`) is where the plan's (`planned`) was: the same number of
+// objects, and the room and each object (paired one to one) with every edge
+// within tolerance_m of the planned one's. tolerance_m 0: never.
+bool SameModel(const CleaningProgress::PlanInputs& planned, const CleaningProgress::PlanInputs& now,
+               double tolerance_m);
 
 class Clean {
  public:
@@ -83,7 +100,10 @@ class Clean {
   // saved map's or the live map's progress) goes on: each planned cell lying
   // mostly inside the cells done then (resume_overlap of its outline) is done
   // now and the tour skips it (resumed_cells counts them); the routes of the
-  // cells done then count as swept. The new plan may be cut differently.
+  // cells done then count as swept. While the model is where the stopped plan
+  // had it (SameModel), the plan is made from that plan's inputs (its cells
+  // again); otherwise from the current model and contacts, and may be cut
+  // differently.
   void Begin(double t, const slam::Slam& slam, const EnvironmentModel& m, const BumpMemory& bumps,
              std::optional<CleaningProgress> resume = std::nullopt);
   // Planning (Begin was called, the plan is not complete): the robot holds still.
@@ -93,6 +113,8 @@ class Clean {
   bool Plan(double t);
   // Cells of the plan taken as done from the cleaning resumed (known once planned).
   int resumed_cells() const { return resumed_cells_; }
+  // The cleaning resumed was planned again from the stopped plan's inputs.
+  bool replanned_same() const { return replanned_same_; }
   Result Step(double t, const slam::Slam& slam, const RangeScan& raw_scan, uint8_t bumpers,
               const BumpMemory& bumps, const WallFollower& follower);
   // The mission's state changed: returning home, finished or stopped.
@@ -157,6 +179,8 @@ class Clean {
   size_t stage_next_ = 0;         // the next rectangle or cell of the stage
   std::optional<CleaningProgress> resume_;
   int resumed_cells_ = 0;
+  bool replanned_same_ = false;
+  std::optional<CleaningProgress::PlanInputs> inputs_;  // what the plan being made is made from
   // The planned cell being matched (ResumeStep): its bounds, the outlines of
   // the cells done before that may overlap it (in resume_), the lattice column
   // next, and the lattice points inside it and inside those so far.

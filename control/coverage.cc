@@ -52,6 +52,10 @@ options::Table<CleaningOptions> CleaningKeys() {
       {"resume_overlap", &O::resume_overlap, 0.5, 1, "",
        "resuming a cleaning: a cell of the new plan at least this share inside the cells done before is "
        "done (the plan may be cut differently: contacts and objects change)"},
+      {"resume_same_model_m", &O::resume_same_model_m, 0, 0.5, "m",
+       "resuming a cleaning: when the room and every object lie within this of where the stopped cleaning "
+       "planned them, the plan is made again from the stopped plan's room, objects and contacts (the same "
+       "cells); otherwise from the current model and contacts (0: always)"},
       {"stuck_s", &O::stuck_s, 1, 3600, "s",
        "no 0.1 m of progress for this long while cleaning: the route point is given up"},
       {"boxed_in_contacts_m", &O::boxed_in_contacts_m, 0, 2, "m",

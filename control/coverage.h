@@ -52,6 +52,8 @@ struct CleaningOptions {
   double coverage_cell_m = 0.05;   // grid of the covered-floor estimate
   double resume_overlap = 0.9;     // resuming: a planned cell at least this share inside the
                                    // cells done before is done
+  double resume_same_model_m = 0.05;  // resuming: the room and every object within this of where
+                                      // the stopped plan had them: plan from its inputs again (its cells)
   double stuck_s = 20;             // no 0.1 m of progress for this long: the route point is given up
   // The cleaning's go-tos (to route points and home) are given these (GoToOptions'
   // of the same names; exploring keeps its own, 0: the exploring campaigns lost

@@ -655,7 +655,10 @@ WheelCommand Mission::Finish(double t, const slam::Slam& slam, const Environment
 
 std::string Mission::CleaningReason() const {
   std::string what = "cleaning " + std::to_string(clean_.plan().cells.size()) + " cells";
-  if (clean_.resumed_cells() > 0) what += " (resumed: " + std::to_string(clean_.resumed_cells()) + " done before)";
+  if (clean_.resumed_cells() > 0) {
+    what += " (resumed: " + std::to_string(clean_.resumed_cells()) + " done before" +
+            (clean_.replanned_same() ? ", same plan)" : ")");
+  }
   return what;
 }
 

@@ -139,6 +139,13 @@ json CleaningJson(const control::CleaningProgress& c, bool cells) {
                    {"unreachable", cell.unreachable}});
     }
     j["cells"] = a;
+    if (c.planned) {
+      json objects = json::array();
+      for (const auto& b : c.planned->objects) objects.push_back(BoxJson(b));
+      j["planned"] = {{"room", BoxJson(c.planned->room)},
+                      {"objects", std::move(objects)},
+                      {"contacts", PointsJson(c.planned->contacts)}};
+    }
   }
   return j;
 }
@@ -401,6 +408,19 @@ bool ReadCleaning(MapReader* r, const json& j, control::CleaningProgress* c) {
       if ((f = r->Member(cj, here, "done", true))) r->Bool(*f, here + ".done", &cell.done);
       if ((f = r->Member(cj, here, "unreachable", false))) r->Bool(*f, here + ".unreachable", &cell.unreachable);
     }
+  }
+  if ((v = r->Member(j, at, "planned", false)) && r->Object(*v, at + ".planned")) {
+    const std::string here = at + ".planned";
+    control::CleaningProgress::PlanInputs in;
+    const json* f;
+    if ((f = r->Member(*v, here, "room", true))) r->Box(*f, here + ".room", &in.room);
+    if ((f = r->Member(*v, here, "objects", true)) && r->Array(*f, here + ".objects", kMaxMapObjects)) {
+      in.objects.resize(f->size());
+      for (size_t i = 0; i < f->size() && r->ok(); ++i)
+        r->Box((*f)[i], here + ".objects[" + std::to_string(i) + "]", &in.objects[i]);
+    }
+    if ((f = r->Member(*v, here, "contacts", true))) r->Points(*f, here + ".contacts", &in.contacts);
+    if (r->ok()) c->planned = std::move(in);
   }
   return r->ok();
 }

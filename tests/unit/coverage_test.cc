@@ -2,6 +2,8 @@
 // lanes clear of every object, a tour that visits every cell, the covered-floor grid.
 #include "control/coverage.h"
 
+#include "control/clean.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -374,6 +376,35 @@ TEST(CoverageTest, TheGridInPiecesIsTheGridInOneGo) {
     pieces.Mark({x, 0.8});
   }
   EXPECT_EQ(whole.covered_m2(), pieces.covered_m2());
+}
+
+// Resuming a cleaning (control/clean.h SameModel): the stopped plan's inputs are
+// planned from again only while the room and every object are where they were.
+TEST(SameModelTest, TheModelIsTheSameWhileEveryEdgeIsWithinTheTolerance) {
+  CleaningProgress::PlanInputs planned;
+  planned.room = {0, 0, 4, 3};
+  planned.objects = {{1, 1, 1.5, 2}, {3, 0, 4, 0.6}};
+  planned.contacts = {{2, 2}};
+  CleaningProgress::PlanInputs now = planned;
+  now.contacts.clear();  // contacts do not count: they are the plan's own
+  EXPECT_TRUE(SameModel(planned, now, 0.05));
+  std::swap(now.objects[0], now.objects[1]);  // paired by place, not by order
+  now.room.xmax += 0.04;
+  now.objects[0].ymin -= 0.049;
+  EXPECT_TRUE(SameModel(planned, now, 0.05));
+  EXPECT_FALSE(SameModel(planned, now, 0.0));  // 0: never
+  EXPECT_FALSE(SameModel(planned, now, 0.03));
+  now = planned;
+  now.room.ymin += 0.06;  // the room moved
+  EXPECT_FALSE(SameModel(planned, now, 0.05));
+  now = planned;
+  now.objects[1].xmin -= 0.5;  // an object moved (issue 14's moved furniture)
+  EXPECT_FALSE(SameModel(planned, now, 0.05));
+  now = planned;
+  now.objects.push_back({2, 2, 2.3, 2.3});  // one more
+  EXPECT_FALSE(SameModel(planned, now, 0.05));
+  now.objects = {planned.objects[0], planned.objects[0]};  // two near one: one each
+  EXPECT_FALSE(SameModel(planned, now, 0.05));
 }
 
 }  // namespace

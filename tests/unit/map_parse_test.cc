@@ -131,6 +131,7 @@ robot::MapSnapshot SyntheticMap() {
   c.cleaning_width_m = 0.3;
   c.cells = {{1, {{0, 0}, {1, 0}, {1, 1}}, {{0.1, 0.1}, {0.9, 0.1}}, true, false},
              {2, {{1, 0}, {2, 0}, {2, 1}}, {}, false, true}};
+  c.planned = control::CleaningProgress::PlanInputs{{-0.1, -0.2, 3.9, 5.4}, {{1, 1, 2, 2.5}}, {{0.5, 0.25}}};
   m.cleaning = c;
   m.calibration =
       slam::CalibrationEstimate{{1.0043, 0.9941, 1.0178}, Eigen::Vector3d(4e-3, 4e-3, 2e-3), 3e-4};
@@ -156,6 +157,12 @@ TEST(MapParseTest, EveryTypedFieldComesBack) {
   EXPECT_EQ(back.cleaning->cells[0].route, m.cleaning->cells[0].route);
   EXPECT_EQ(back.cleaning->finished_t, 400.5);
   EXPECT_EQ(back.cleaning->swept_t, 0);  // written as null
+  ASSERT_TRUE(back.cleaning->planned);
+  EXPECT_EQ(j["cleaning"]["planned"].dump(),
+            R"({"contacts":[[0.5,0.25]],"objects":[[1.0,1.0,2.0,2.5]],"room":[-0.1,-0.2,3.9,5.4]})");
+  EXPECT_EQ(back.cleaning->planned->contacts, m.cleaning->planned->contacts);
+  EXPECT_EQ(back.cleaning->planned->objects[0].ymax, 2.5);
+  EXPECT_EQ(back.cleaning->planned->room.xmin, -0.1);
   EXPECT_EQ(back.calibration->ratio_sigma, 3e-4);
   ASSERT_TRUE(back.relocalized);
   EXPECT_EQ(back.relocalized->t, 31.5);
@@ -247,6 +254,10 @@ TEST(MapParseTest, EachMalformedFieldIsOneClearLine) {
        {1},
        "map.cleaning.cells[1].polygon[0]: not an array of 2 numbers"},
       {"/cleaning/finished_t", "late", "map.cleaning.finished_t: not a number"},
+      {"/cleaning/planned", 3, "map.cleaning.planned: not an object"},
+      {"/cleaning/planned/room", json::value_t::discarded, "map.cleaning.planned.room: missing"},
+      {"/cleaning/planned/objects/0", {1, 2}, "map.cleaning.planned.objects[0]: not an array of 4 numbers"},
+      {"/cleaning/planned/contacts/0/1", "x", "map.cleaning.planned.contacts[0][1]: not a number"},
       {"/calibration/scale/0", 3.0, "map.calibration.scale: a scale factor outside [0.5, 1.5]"},
       {"/calibration/std", {1, 2}, "map.calibration.std: not an array of 3 numbers"},
       {"/relocalized/hypotheses", -1, "map.relocalized.hypotheses: out of range [0, 2147483647]"},
