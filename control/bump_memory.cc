@@ -41,7 +41,7 @@ void BumpMemory::Record(const Pose2& me, uint8_t bumpers) {
     points_.push_back(p);
 }
 
-RangeScan BumpMemory::Apply(const RangeScan& scan, const Pose2& me, size_t from) const {
+RangeScan BumpMemory::Apply(const RangeScan& scan, const Pose2& me, size_t from, double skip_within_m) const {
   // What the bumper found is seen from then on by every beam whose path the
   // robot's body would sweep into it: the follower steers round it instead of
   // driving into the same obstacle again.
@@ -49,7 +49,8 @@ RangeScan BumpMemory::Apply(const RangeScan& scan, const Pose2& me, size_t from)
   const double c = std::cos(me.theta), s = std::sin(me.theta);
   for (size_t k = from; k < points_.size(); ++k) {
     const Eigen::Vector2d& b = points_[k];
-    if (std::hypot(b.x() - me.x, b.y() - me.y) > options_.bump_reach_m) continue;
+    const double d = std::hypot(b.x() - me.x, b.y() - me.y);
+    if (d > options_.bump_reach_m || d < skip_within_m) continue;
     for (int i = 0; i < kNumIrSensors; ++i) {
       const auto& m = mounts_[static_cast<size_t>(i)];
       const Eigen::Vector2d sensor(me.x + c * m.x - s * m.y, me.y + s * m.x + c * m.y);

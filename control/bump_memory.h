@@ -41,8 +41,9 @@ class BumpMemory {
   void Record(const Pose2& me, uint8_t bumpers);
   // The scan with every remembered contact a beam would see added as a reading;
   // only those recorded from index `from` on (relocalising, the others are in
-  // the map's frame, not the fresh local SLAM's `me` is in).
-  RangeScan Apply(const RangeScan& scan, const Pose2& me, size_t from = 0) const;
+  // the map's frame, not the fresh local SLAM's `me` is in), and none closer
+  // than skip_within_m to the robot's centre (under its body; 0: none left out).
+  RangeScan Apply(const RangeScan& scan, const Pose2& me, size_t from = 0, double skip_within_m = 0) const;
   const std::vector<Eigen::Vector2d>& points() const { return points_; }
   // The contacts recorded from index `from` on were in another frame: moves
   // them by t (a point in that frame -> this one). Issue 14: the bumps of a

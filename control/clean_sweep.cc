@@ -144,6 +144,7 @@ Clean::Result Clean::StepPlanGoal(double t, const Pose2& me, double rot, const s
     if (go_to_.TryGoal(t, RotateVector(p, -rot), 0, false, slam, bumps)) {
       go_to_.Begin(t);
       phase_ = Phase::kTransit;
+      progress_t_ = t;  // stuck_s counts for this route point from now
       return {};
     }
   }

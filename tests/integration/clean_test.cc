@@ -119,15 +119,39 @@ TEST(CleanCampaignSubsetTest, GapsBetweenConvexCornersAreCleanedThrough) {
     o.mission.cleaning.boxed_in_corners = corners;
     double sum = 0;
     std::printf("boxed_in_corners %d:\n", corners);
-    for (const uint64_t seed : {1025, 1018, 1163, 1066, 1157}) sum += CleanGenerated(seed, o).coverage;
-    // Measured 2026-12-05: mean 0.845 (0.804, 0.881, 0.898, 0.881, 0.762);
-    // without: 0.166 (0.006, 0.143, 0.171, 0.259, 0.252).
+    for (const uint64_t seed : {1025, 1018, 1163, 1157}) sum += CleanGenerated(seed, o).coverage;
+    // Measured 2026-12-05: mean 0.856 (0.801, 0.871, 0.898, 0.852); without:
+    // 0.143 (0.006, 0.143, 0.171, 0.252). (1066 left the subset when the
+    // go-to's front check stopped seeing contacts under the body: it cleans
+    // 0.935 with or without the corners since.)
     if (corners) {
-      EXPECT_GE(sum / 5, 0.80);
+      EXPECT_GE(sum / 4, 0.80);
     } else {
-      EXPECT_LE(sum / 5, 0.30) << "the gaps are no longer closed without it: this test no longer tests it";
+      EXPECT_LE(sum / 4, 0.30) << "the gaps are no longer closed without it: this test no longer tests it";
     }
   }
+}
+
+// A fixed subset of the clean campaign where the robot stood still on its way
+// to route points: the contacts under its body, which the go-to's plans leave
+// out (under_body_contacts_m), still showed in its front check 0.09-0.10 m
+// ahead, under front_stop_m, so it backed off and planned the same path until
+// stuck_s gave the point up, four points in a row, and the cell with them.
+// The front check now leaves those contacts out too, and stuck_s counts from
+// the go-to's start for each route point.
+TEST(CleanCampaignSubsetTest, ContactsUnderTheBodyNoLongerHoldTheRobotStill) {
+  const robot::CoreOptions o = robot::DefaultCoreOptions();
+  double sum = 0;
+  int cells_done = 0;
+  for (const uint64_t seed : {1040, 1064, 1124, 1110, 1197}) {
+    const metrics::CleanScore s = CleanGenerated(seed, o);
+    sum += s.coverage;
+    cells_done += s.cells_done;
+  }
+  // Measured 2026-12-05: mean 0.839 (0.917, 0.820, 0.817, 0.752, 0.887), 14
+  // cells done; before: 0.075 (0.050, 0.016, 0.015, 0.017, 0.277), 0 cells done.
+  EXPECT_GE(sum / 5, 0.75);
+  EXPECT_GE(cells_done, 10);
 }
 
 TEST(CleanModeTest, PlannedCleaningBeatsRandomBounceOverTheSameTime) {

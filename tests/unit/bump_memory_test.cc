@@ -81,5 +81,22 @@ TEST(BumpMemoryTest, ContactsBeforeAnIndexAreNotShown) {
   EXPECT_NEAR(*seen.range_m[3], 0.19, 1e-9);
 }
 
+// A go-to's front check leaves out the contacts under the body that its plans
+// leave out (under_body_contacts_m): they would read 0.09-0.10 m ahead and
+// hold the robot still on the path planned over them.
+TEST(BumpMemoryTest, ContactsUnderTheBodyCanBeLeftOut) {
+  BumpMemory b({}, CentreMounts(), kRadius);
+  b.Record({0, 0, 0}, 3);    // ahead at 0.19 m
+  b.Record({0.5, 0, 0}, 3);  // at (0.69, 0)
+  RangeScan empty;
+  const Pose2 on_first{0.1, 0, 0};  // the first contact 0.09 m ahead: under the body
+  ASSERT_TRUE(b.Apply(empty, on_first).range_m[3].has_value());
+  EXPECT_NEAR(*b.Apply(empty, on_first).range_m[3], 0.09, 1e-9);
+  const RangeScan skipped = b.Apply(empty, on_first, 0, 0.14);
+  ASSERT_TRUE(skipped.range_m[3].has_value());  // the farther one is still seen
+  EXPECT_NEAR(*skipped.range_m[3], 0.59, 1e-9);
+  EXPECT_NEAR(*b.Apply(empty, on_first, 0, 0.0).range_m[3], 0.09, 1e-9);  // 0: none left out
+}
+
 }  // namespace
 }  // namespace irslam::control
