@@ -412,12 +412,8 @@ GoTo::Result GoTo::Step(double t, const slam::Slam& slam, const RangeScan& raw_s
   const Pose2 me = slam.pose();
   const Eigen::Vector2d pos(me.x, me.y);
   // Something close ahead stops the robot and makes it plan around it.
-  // Contacts under the body, which the plans leave out (under_body_contacts_m),
-  // are left out of this check too: their readings (clamped to
-  // bump_min_range_m, 0.09-0.10 m ahead of the centre, under the cleaning
-  // go-to's front_stop_m) held the robot still on a path planned over them,
-  // backing off and planning the same path again, until the cleaning's stuck_s
-  // gave the route point up (40 % of the cells given up on generated rooms).
+  // Not the contacts under the body the plans leave out: read 0.09-0.10 m ahead,
+  // they held the robot still on the path planned over them (docs/cleaning.md).
   const RangeScan scan = bumps.Apply(raw_scan, me, 0, o.under_body_contacts_m);
   const std::optional<double> front = Front(scan, follower);
   const bool blocked = front && *front < o.front_stop_m;
