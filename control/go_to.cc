@@ -278,8 +278,12 @@ void GoTo::BeginEscape(double t, const slam::Slam& slam, double contact_bearing)
   const Eigen::Vector2d pos(me.x, me.y);
   escape_heading_ = NormalizeAngle(me.theta + contact_bearing + M_PI);
   double nearest = radius_m_ + options_.escape_side_m;
+  // Only a side on the contact's side of the robot can be what it touched: away
+  // from a side behind it (a dead end's wall) was straight into the contact.
+  const Eigen::Vector2d toward(std::cos(me.theta + contact_bearing), std::sin(me.theta + contact_bearing));
   for (const auto& l : slam.lines()) {
     const Eigen::Vector2d away = pos - ClosestPoint({l.p0, l.p1}, pos);
+    if (away.dot(toward) >= 0) continue;
     if (away.norm() < nearest && away.norm() > 1e-6) {
       nearest = away.norm();
       escape_heading_ = std::atan2(away.y(), away.x());

@@ -331,6 +331,25 @@ TEST(GoToTest, EscapesAContactThenGivesUpWhenItKeepsHittingIt) {
   EXPECT_EQ(res.why, "the way is blocked by obstacles the sensors miss");
 }
 
+// Pressed ahead (both bumpers) with a mapped wall just behind: the escape
+// turns away from the contact. Until 2026-12-05 it faced away from the nearest
+// side within reach, whichever side of the robot it was on: from the bottom of
+// a dead end (the wall behind) that was straight ahead, so the robot drove into
+// what it touched and never moved (clean campaign 1147: 92 -> 8 % covered).
+TEST(GoToTest, AnEscapeFacesAwayFromTheContactNotFromAWallBehind) {
+  for (const double wall_x : {-0.22, 0.22}) {  // behind, then ahead (what was hit)
+    Rig r;
+    r.slam.AdoptMap({0, 0, 0}, {testing::Line(1, wall_x, -1, wall_x, 1)});
+    GoTo g({}, r.o.slam.geometry, r.o.slam.mounts);
+    ASSERT_TRUE(g.TryGoal(0, {wall_x < 0 ? 1.0 : -1.0, 0.5}, 0, false, r.slam, r.bumps));
+    g.Begin(0);
+    const GoTo::Result res = g.Step(0, r.slam, RangeScan{}, 3, r.bumps, r.follower);
+    EXPECT_EQ(res.status, GoTo::Status::kDriving) << wall_x;
+    EXPECT_DOUBLE_EQ(res.twist.v, 0) << wall_x << ": not forward into the contact";
+    EXPECT_DOUBLE_EQ(std::abs(res.twist.omega), 0.9) << wall_x << ": turning round at the escape limit";
+  }
+}
+
 TEST(GoToTest, AGoalWithoutHeadingStaysReached) {
   Rig r;
   GoTo g({}, r.o.slam.geometry, r.o.slam.mounts);
