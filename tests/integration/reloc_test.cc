@@ -498,10 +498,12 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
   // waits idle). The floors keep today's rates from dropping. Since the
   // cleaning's boxed_in_corners (2026-12-05): 45 of 48, and 5 of these seven
   // (run 16 again never found kidnapped: it plans through a gap it used to
-  // give up, and waits idle where the kidnap put it).
+  // give up, and waits idle where the kidnap put it). Since escapes face away
+  // from the contact, not from a wall behind (2026-12-05): 48 of 48, every run
+  // detected and back within 10 cm, and 7 of these seven.
   if (std::getenv("RELOC_KIDNAP_RUNS") || std::getenv("RELOC_KIDNAP_RUN")) return;
-  EXPECT_GE(c.detected, 5);
-  EXPECT_GE(c.recovered, 5);
+  EXPECT_GE(c.detected, 6);
+  EXPECT_GE(c.recovered, 6);
 }
 
 // fig20's first mission saves the wall at the start in two pieces 1 cm apart
