@@ -348,10 +348,12 @@ TEST_F(CleanE2eTest, StopAndStartResumeTheRemainingCellsAndSoDoesARestartAfterKi
   s = Status();
   ASSERT_TRUE(s);
   EXPECT_EQ((*s)["state"], "clean") << "a start after stop goes on cleaning: " << s->dump();
-  // The model has not moved: planned again from the stopped plan's inputs (the
-  // saved map's cleaning.planned), the same cells. Before they were kept, a CI
-  // run planned round the contacts known by then: 6 cells, 2 done.
-  EXPECT_NE((*s)["reason"].get<std::string>().find(", same plan)"), std::string::npos) << s->dump();
+  // The saved map keeps the plan's inputs (cleaning.planned): while the model is
+  // where it was, the resume plans from them (the same cells; in process,
+  // RelocTest.StopAndStartInTheLiveMapPlansTheSameCells). Here the model is
+  // made again at the start and may differ (a CI run: fig16's incomplete
+  // object 2 was no longer modelled, 2 objects where the plan had 3), and then
+  // the plan is made from the current model: not asserted to be the same.
   EXPECT_TRUE(first.contains("planned") && first["planned"].contains("contacts")) << first.dump();
   EXPECT_EQ((*s)["cleaning"]["cells_done"], done_at_stop) << s->dump();
   EXPECT_EQ((*s)["cleaning"]["cells_total"], cells_total) << s->dump();
