@@ -16,6 +16,8 @@ options::Table<LoopOptions> LoopKeys() {
        "... and within this of its heading"},
       {"loop_anchor_steady_s", &O::loop_anchor_steady_s, 0, 60, "s",
        "the loop's start is taken after this long of steady following"},
+      {"loop_anchor_spacing_m", &O::loop_anchor_spacing_m, 0.1, 1000, "m",
+       "... and another start every this much of steady following (a loop closes at any; 1000: the first only)"},
       {"loop_free_object_turn_rad", &O::loop_free_object_turn_rad, 0, 6.3, "rad",
        "a loop that turned more than this clockwise went round a free object"},
       {"loop_orbit_turn_rad", &O::loop_orbit_turn_rad, M_PI, 1000, "rad",
@@ -37,7 +39,7 @@ LoopEvent LoopDetector::Update(double t, bool steady, const Pose2& pose, double 
   heading_peak_ = searching ? heading_ : std::max(heading_peak_, heading_);
   if (heading_peak_ - heading_ > options_.loop_orbit_turn_rad) {
     // Circled something clockwise without a steady anchor: a free object.
-    have_anchor_ = false;
+    anchors_.clear();
     follow_since_ = -1;
     heading_peak_ = heading_;
     return LoopEvent::kFreeObject;
@@ -47,30 +49,36 @@ LoopEvent LoopDetector::Update(double t, bool steady, const Pose2& pose, double 
   } else if (follow_since_ < 0) {
     follow_since_ = t;
   }
-  if (follow_since_ >= 0 && t - follow_since_ >= options_.loop_anchor_steady_s && !have_anchor_) {
-    have_anchor_ = true;
-    anchor_ = pose;
-    anchor_heading_ = heading_;
-    anchor_distance_ = distance_m;
+  if (follow_since_ >= 0 && t - follow_since_ >= options_.loop_anchor_steady_s &&
+      (anchors_.empty() || distance_m - anchors_.back().distance >= options_.loop_anchor_spacing_m)) {
+    AddAnchor(pose, distance_m);
   }
-  if (!have_anchor_) return LoopEvent::kNone;
-  if (distance_m - anchor_distance_ <= options_.loop_min_distance_m) return LoopEvent::kNone;
-  const double d = std::hypot(pose.x - anchor_.x, pose.y - anchor_.y);
-  const double a = std::abs(NormalizeAngle(pose.theta - anchor_.theta));
-  if (d >= options_.loop_close_radius_m || a >= options_.loop_close_angle_rad)
-    return LoopEvent::kNone;
-  if (turned() < -options_.loop_free_object_turn_rad) {
-    have_anchor_ = false;
-    heading_peak_ = heading_;  // (the orbit check starts over too)
-    return LoopEvent::kFreeObject;
+  // Back at an anchor (the oldest first: the longest loop).
+  for (const Anchor& a : anchors_) {
+    if (distance_m - a.distance <= options_.loop_min_distance_m) break;  // (and all after it)
+    const double d = std::hypot(pose.x - a.pose.x, pose.y - a.pose.y);
+    const double da = std::abs(NormalizeAngle(pose.theta - a.pose.theta));
+    if (d >= options_.loop_close_radius_m || da >= options_.loop_close_angle_rad) continue;
+    anchor_ = a;
+    if (turned() < -options_.loop_free_object_turn_rad) {
+      anchors_.clear();
+      heading_peak_ = heading_;  // (the orbit check starts over too)
+      return LoopEvent::kFreeObject;
+    }
+    return LoopEvent::kRoom;
   }
-  return LoopEvent::kRoom;
+  return LoopEvent::kNone;
+}
+
+void LoopDetector::AddAnchor(const Pose2& pose, double distance_m) {
+  if (anchors_.size() >= kMaxAnchors) anchors_.erase(anchors_.begin());  // (within the reserve)
+  anchors_.push_back({pose, heading_, distance_m});
+  if (anchors_.size() == 1) anchor_ = anchors_.front();
 }
 
 void LoopDetector::Rearm(const Pose2& pose, double distance_m) {
-  anchor_ = pose;
-  anchor_distance_ = distance_m;
-  anchor_heading_ = heading_;
+  anchors_.clear();
+  AddAnchor(pose, distance_m);
 }
 
 }  // namespace irslam::control

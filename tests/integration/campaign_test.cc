@@ -59,10 +59,16 @@ INSTANTIATE_TEST_SUITE_P(Profiles, CampaignSubsetTest,
                          // 7/12, 1/12; realistic 7/12, 0.129, 1/12, 12/12; harsh 3/12, 0, 0, 12/12;
                          // ratio 12/12, 3/12, 2/12 (realistic one run lower here; over 300 realistic
                          // worlds with the calibration on it went 22.3 -> 23.7 %, docs/robustness.md).
+                         // 2026-12-05, loops closing at any anchor: nominal 12/12, 0.742, 7/12, 1/12;
+                         // realistic 9/12, 0.129, 1/12, 12/12; harsh 7/12, 0, 0, 12/12; ratio 12/12,
+                         // 3/12, 1/12: a harsh run whose loop never closed was scored at the time limit,
+                         // and is now scored when its loop closes, earlier, with less to estimate from
+                         // (over 100 worlds per profile with the calibration on, the ratio row went
+                         // 24 -> 26 % realistic, 7 -> 8 % harsh: docs/robustness.md).
                          // Raise these as the robustness work lands.
                          ::testing::Values(Floor{sim::NoiseProfile::kNominal, 12 / 12.0, 0.74, 7 / 12.0, 1 / 12.0, 12 / 12.0},
-                                           Floor{sim::NoiseProfile::kRealistic, 7 / 12.0, 0.12, 1 / 12.0, 1.0, 3 / 12.0},
-                                           Floor{sim::NoiseProfile::kHarsh, 3 / 12.0, 0.0, 0.0, 1.0, 2 / 12.0}),
+                                           Floor{sim::NoiseProfile::kRealistic, 9 / 12.0, 0.12, 1 / 12.0, 1.0, 3 / 12.0},
+                                           Floor{sim::NoiseProfile::kHarsh, 7 / 12.0, 0.0, 0.0, 1.0, 1 / 12.0}),
                          [](const ::testing::TestParamInfo<Floor>& p) { return std::string(sim::ToString(p.param.profile)); });
 
 }  // namespace

@@ -63,6 +63,45 @@ TEST(LoopDetectorTest, NoAnchorUntilSteadyLongEnough) {
   EXPECT_TRUE(d.has_anchor());  // 1.55 s
 }
 
+// Generated room 1169: the first wall followed steadily was a piece of
+// furniture's side; at its end the robot went on along the room's wall and
+// round the room for ever, never on that side again. Here: 2 m along a line
+// (y = -2, heading 0) that the loop does not pass, then round the unit circle
+// counter-clockwise from (1, 0). With one anchor (on the line) no loop closed.
+TEST(LoopDetectorTest, ALoopClosesAtAnAnchorTakenAfterTheFirstWallWasLeft) {
+  LoopDetector d({});
+  double t = 0, dist = 0;
+  for (; dist < 2.0 - 1e-9; t += 0.1, dist += 0.02)
+    ASSERT_EQ(d.Update(t, true, {-3.0 + dist, -2.0, 0.0}, dist), LoopEvent::kNone);
+  // Searching for the next wall (not steady) on the way to the circle.
+  for (int i = 0; i < 20; ++i, t += 0.1) ASSERT_EQ(d.Update(t, false, {1.0, 0.0, M_PI / 2}, dist), LoopEvent::kNone);
+  const size_t on_the_line = d.anchors();
+  EXPECT_EQ(on_the_line, 2U);  // at 1.5 s (0.3 m) and 1.0 m on
+  LoopEvent e = LoopEvent::kNone;
+  const double circle_from = dist;
+  for (double a = 0; a < 4 * M_PI && e == LoopEvent::kNone; a += 0.01, t += 0.05, dist += 0.01)
+    e = d.Update(t, true, {std::cos(a), std::sin(a), NormalizeAngle(a + M_PI / 2)}, dist);
+  ASSERT_EQ(e, LoopEvent::kRoom);
+  // The anchor it closed at: the first on the circle (1.5 s, 0.3 m along it),
+  // once round (2 pi) and back within 0.25 m.
+  EXPECT_NEAR(d.anchor().x, std::cos(0.3), 0.02);
+  EXPECT_NEAR(d.turned(), 2 * M_PI - 0.25, 0.03);
+  EXPECT_NEAR(dist - circle_from, 0.3 + 2 * M_PI - 0.25, 0.03);
+}
+
+TEST(LoopDetectorTest, AnchorsAreBoundedAndRearmKeepsOne) {
+  LoopOptions o;
+  o.loop_min_distance_m = 1000;  // never closes
+  LoopDetector d(o);
+  double t = 0;
+  for (double dist = 0; dist < 400; dist += 0.05, t += 0.25)
+    d.Update(t, true, {dist, 0, 0}, dist);
+  EXPECT_EQ(d.anchors(), LoopDetector::kMaxAnchors);
+  d.Rearm({1, 2, 0}, 400);
+  EXPECT_EQ(d.anchors(), 1U);
+  EXPECT_NEAR(d.anchor().y, 2, 1e-12);
+}
+
 // The orbit check: round a small box without ever following it steadily (no
 // anchor), as the follower does round boxes whose sides are shorter than it
 // needs to settle.
