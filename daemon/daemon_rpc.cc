@@ -4,6 +4,21 @@
 #include "daemon/irslamd.h"
 
 namespace irslam {
+namespace {
+
+// The start's log line: which map the mission goes on in (RobotCore::Start).
+const char* StartLogText(robot::RobotCore::StartKind kind) {
+  switch (kind) {
+    case robot::RobotCore::StartKind::kLiveMap: return "on in the live map";
+    case robot::RobotCore::StartKind::kSavedMap: return "relocalising in the saved map";
+    case robot::RobotCore::StartKind::kResumed: return "resumed after the stop was released";
+    case robot::RobotCore::StartKind::kNewMap:
+    case robot::RobotCore::StartKind::kNone: break;
+  }
+  return "a new map";
+}
+
+}  // namespace
 
 RpcMethodTable Daemon::MakeMethods() {
   // Each handler returns the whole response; an API server with deferred replies
@@ -72,8 +87,7 @@ nlohmann::json Daemon::Start(const rpc::Request& req) {
   maps_.OnMissionStarted();
   // For irslam-replay (docs/replay.md): the mode goes with the start.
   if (recorder_) recorder_->Note(core_->clean_mode() ? "start_clean" : "start", now);
-  std::fprintf(stderr, "<6>irslamd: mission started (mode %s%s)\n", mode.c_str(),
-               core_->saved_map() ? ", in the saved map" : "");
+  std::fprintf(stderr, "<6>irslamd: mission started (mode %s, %s)\n", mode.c_str(), StartLogText(core_->last_start()));
   return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
 }
 

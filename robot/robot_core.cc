@@ -154,17 +154,20 @@ bool RobotCore::Start(double now_s, std::string* why) {
     estop_latched_ = false;
     fault_latched_ = false;
     mission_.ClearFault(now_s);
-    if (mission_.state() != MissionState::kIdle && mission_.state() != MissionState::kDone) return true;
+    if (mission_.state() != MissionState::kIdle && mission_.state() != MissionState::kDone) {
+      last_start_ = StartKind::kResumed;
+      return true;
+    }
   }
   if (mission_.state() != MissionState::kIdle && mission_.state() != MissionState::kDone)
     return mission_.Start(now_s, why);  // (refused: already running)
   const bool live = !forget_live_ && slam_.num_lines() > 0 && mission_.model().room.box.has_value();
-  if (live) return mission_.StartKnown(now_s, slam_, why);
+  if (live) return Started(mission_.StartKnown(now_s, slam_, why), StartKind::kLiveMap);
   const bool in_map = saved_map_ && saved_map_->room.box.has_value() && !saved_map_->lines.empty();
   if (!in_map) {
     Renew(std::nullopt);
     forget_live_ = false;
-    return mission_.Start(now_s, why);
+    return Started(mission_.Start(now_s, why), StartKind::kNewMap);
   }
   Renew(saved_map_->calibration);
   forget_live_ = false;
@@ -173,7 +176,12 @@ bool RobotCore::Start(double now_s, std::string* why) {
   saved.model.room = saved_map_->room;
   saved.model.objects = saved_map_->objects;
   saved.cleaning = saved_map_->cleaning;
-  return mission_.StartInMap(now_s, std::move(saved), why);
+  return Started(mission_.StartInMap(now_s, std::move(saved), why), StartKind::kSavedMap);
+}
+
+bool RobotCore::Started(bool accepted, StartKind kind) {
+  if (accepted) last_start_ = kind;
+  return accepted;
 }
 
 void RobotCore::AdoptIfAsked(double now_s) {

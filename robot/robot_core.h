@@ -108,6 +108,11 @@ class RobotCore {
     saved_map_ = std::move(map);
   }
   const std::optional<MapSnapshot>& saved_map() const { return saved_map_; }
+  // What the last accepted Start did, as the list above says (the daemon's log
+  // line tells it): nothing yet, a new map, on in the live map, relocalising in
+  // the saved map, or on after an emergency stop or a fault was released.
+  enum class StartKind { kNone, kNewMap, kLiveMap, kSavedMap, kResumed };
+  StartKind last_start() const { return last_start_; }
 
   MissionState state() const { return mission_.state(); }
   // Cleaning cells finished since the mission started (0 when not cleaning).
@@ -153,10 +158,13 @@ class RobotCore {
   WheelCommand last_cmd_;
   std::optional<MapSnapshot> saved_map_;
   bool forget_live_ = false;
+  StartKind last_start_ = StartKind::kNone;
   control::WorkClock work_clock_;
   // A fresh SLAM and mission (a start from nothing or in a saved map), the
   // calibration carried over (the saved map's, else the live one's).
   void Renew(const std::optional<slam::CalibrationEstimate>& calibration);
+  // Start's bookkeeping: remembers `kind` when the start was accepted.
+  bool Started(bool accepted, StartKind kind);
   // The mission committed (or restores the map on an end): the SLAM adopts it.
   void AdoptIfAsked(double now_s);
 };

@@ -16,6 +16,8 @@
 #   IRSLAM_FUZZ_RUNS   also stop each target after this many executions.
 #   IRSLAM_FUZZ_NICE   run the fuzzers at this niceness (e.g. 19 for a long
 #                      campaign on a shared machine).
+#   IRSLAM_FUZZ_JOBS   targets fuzzed at once (default: the number of cores);
+#                      each has SECONDS on a core of its own.
 # Every run appends one line per target to $IRSLAM_FUZZ_STATE/ledger.tsv (UTC
 # end time, target, seconds, executions, result, commit) and prints each target's
 # total over the ledger; its libFuzzer log (final stats included) is kept in
@@ -44,8 +46,9 @@ ledger=$state/ledger.tsv
 [ -f "$ledger" ] || printf 'ended\ttarget\tseconds\texecutions\tresult\tcommit\n' >"$ledger"
 extra=()
 [ -z "${IRSLAM_FUZZ_RUNS:-}" ] || extra+=(-runs="$IRSLAM_FUZZ_RUNS")
-status=0
-for t in "${targets[@]}"; do
+# One target: its run, its log, its ledger line. Returns 1 on a crash or an interrupt.
+fuzz_one() {
+  local t=$1 work log start result rc execs
   work=$state/corpus/$t  # new inputs go here, the committed seeds stay as they are
   mkdir -p "$work"
   # The shipped config is a seed too (not copied into the corpus: one file).
@@ -62,12 +65,10 @@ for t in "${targets[@]}"; do
   if [ "$rc" -eq 72 ]; then  # libFuzzer's exit code after SIGINT: stopped by hand, stats printed
     echo "fuzz.sh: $t interrupted" >&2
     result=interrupted
-    status=1
   elif [ "$rc" -ne 0 ]; then
     echo "fuzz.sh: $t FAILED (log: $log; input in $build/artifacts/)" >&2
     tail -40 "$log" >&2
     result=crash
-    status=1
   fi
   cp "$log" "$build/$t.log"
   execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
@@ -77,5 +78,22 @@ for t in "${targets[@]}"; do
   awk -F'\t' -v t="$t" 'NR > 1 && $2 == t { n += $4; s += $3; if ($5 == "crash") c++ }
     END { printf "fuzz.sh: %s in total (%s): %d executions, %d s, %d crashes\n", t, FILENAME, n, s, c }' \
     "$ledger" >&2
+  [ "$result" = ok ]
+}
+
+# The targets run side by side, one per core (IRSLAM_FUZZ_JOBS, default nproc):
+# each still gets its SECONDS on a core of its own, and the whole run takes
+# ceil(targets / jobs) x SECONDS instead of targets x SECONDS.
+jobs_max=${IRSLAM_FUZZ_JOBS:-$(nproc)}
+status=0
+pids=()
+for t in "${targets[@]}"; do
+  fuzz_one "$t" &
+  pids+=($!)
+  if [ ${#pids[@]} -ge "$jobs_max" ]; then
+    for p in "${pids[@]}"; do wait "$p" || status=1; done
+    pids=()
+  fi
 done
+for p in "${pids[@]}"; do wait "$p" || status=1; done
 exit $status

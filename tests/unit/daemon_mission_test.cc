@@ -381,6 +381,7 @@ TEST_F(DaemonMissionTest, TheSavedMapGoesToTheCoreAndFreshForgetsIt) {
   const auto started = Call("start", {{"fresh", true}});
   ASSERT_TRUE(started.contains("result")) << started;
   EXPECT_FALSE(daemon_->core().saved_map());
+  EXPECT_EQ(daemon_->core().last_start(), robot::RobotCore::StartKind::kNewMap);
   EXPECT_FALSE(daemon_->saved_map());
   Run(10);
   ASSERT_EQ(Call("stop")["result"]["map"], "saved");
@@ -404,6 +405,7 @@ TEST_F(DaemonMissionTest, AFinishedMissionsMapIsTheNextStartsSavedMap) {
   Open();
   Run(1);
   ASSERT_TRUE(Call("start").contains("result"));
+  EXPECT_EQ(daemon_->core().last_start(), robot::RobotCore::StartKind::kNewMap);
   for (int i = 0; i < 90 && daemon_->StatusJson()["state"] != "done"; ++i) Run(10);
   ASSERT_EQ(daemon_->StatusJson()["state"], "done");
   Run(0.1);
@@ -412,6 +414,22 @@ TEST_F(DaemonMissionTest, AFinishedMissionsMapIsTheNextStartsSavedMap) {
   const nlohmann::json served = Call("map")["result"];
   EXPECT_EQ(ToJson(*daemon_->core().saved_map())["objects"], served["objects"]);
   EXPECT_EQ(daemon_->core().saved_map()->lines.size(), served["lines"].size());
+  // The next start goes on in the live map (a saved map is there too, and the
+  // log line once said "in the saved map" here).
+  ASSERT_TRUE(Call("start").contains("result"));
+  EXPECT_EQ(daemon_->core().last_start(), robot::RobotCore::StartKind::kLiveMap);
+  EXPECT_EQ(daemon_->StatusJson()["state"], "model");
+}
+
+// A daemon started with a saved map relocalises in it at the first start.
+TEST_F(DaemonMissionTest, TheFirstStartWithASavedMapRelocalisesInIt) {
+  WriteStateMap(settings_.state_dir, GoldenMap());
+  Open();
+  Run(1);
+  EXPECT_EQ(daemon_->core().last_start(), robot::RobotCore::StartKind::kNone);
+  ASSERT_TRUE(Call("start").contains("result"));
+  EXPECT_EQ(daemon_->core().last_start(), robot::RobotCore::StartKind::kSavedMap);
+  EXPECT_EQ(daemon_->StatusJson()["state"], "relocalize");
 }
 
 // A map file that checks out (checksum, types) but does not make a map (two
