@@ -129,8 +129,8 @@ void Clean::Begin(double t, const slam::Slam& slam, const EnvironmentModel& m, c
     for (const auto& o : m.objects) in.objects.push_back(o.box);
     // The latest contacts, as many as the planner takes.
     const auto& points = bumps.points();
-    const size_t keep = std::min(points.size(), static_cast<size_t>(std::max(0, options_.max_bump_obstacles)));
-    for (size_t k = points.size() - keep; k < points.size(); ++k) in.contacts.push_back(RotateVector(points[k], rot));
+    for (size_t k = FirstPlannedContact(points.size(), options_); k < points.size(); ++k)
+      in.contacts.push_back(RotateVector(points[k], rot));
     if (resume_ && resume_->planned && SameModel(*resume_->planned, in, options_.resume_same_model_m)) {
       in = *resume_->planned;  // nothing moved: the same cells as the plan stopped
       replanned_same_ = true;

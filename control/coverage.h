@@ -17,6 +17,7 @@
 #define IRSLAM_CONTROL_COVERAGE_H_
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <optional>
 #include <vector>
 
@@ -117,6 +118,12 @@ std::vector<Eigen::Vector2d> SweepRoute(const CoverageCell& cell, double spacing
 
 // The whole plan from the room model (map frame), contacts (map frame) and where
 // the robot stands (map frame).
+// The contacts a plan goes round are the latest max_bump_obstacles of those
+// remembered (oldest first): the index of the first of them among n.
+inline size_t FirstPlannedContact(size_t n, const CleaningOptions& o) {
+  return n - std::min(n, static_cast<size_t>(std::max(0, o.max_bump_obstacles)));
+}
+
 CoveragePlan PlanCoverage(const Box& room, const std::vector<Box>& objects,
                           const std::vector<Eigen::Vector2d>& bumps, const Eigen::Vector2d& start,
                           double robot_radius_m, const CleaningOptions& options);

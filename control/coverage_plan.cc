@@ -37,10 +37,7 @@ CoveragePlan DecomposeOriented(Box room, std::vector<Box> objects, std::vector<E
   std::vector<Box> obstacles;
   for (const auto& b : objects) obstacles.push_back({b.xmin - g, b.ymin - g, b.xmax + g, b.ymax + g});
   const double gb = radius + o.bump_block_m;
-  const size_t first = bumps.size() > static_cast<size_t>(o.max_bump_obstacles)
-                           ? bumps.size() - static_cast<size_t>(o.max_bump_obstacles)
-                           : 0;
-  for (size_t i = first; i < bumps.size(); ++i) {
+  for (size_t i = FirstPlannedContact(bumps.size(), o); i < bumps.size(); ++i) {
     const auto& p = bumps[i];
     obstacles.push_back({p.x() - gb, p.y() - gb, p.x() + gb, p.y() + gb});
   }
@@ -189,8 +186,8 @@ bool CoveragePlanner::Step() {
   const double n = static_cast<double>(plan_.cells.size());
   switch (stage_) {
     case Stage::kDecompose: {
-      const double m = static_cast<double>(objects_.size() +
-                                           std::min(bumps_.size(), static_cast<size_t>(options_.max_bump_obstacles)));
+      const double m =
+          static_cast<double>(objects_.size() + bumps_.size() - FirstPlannedContact(bumps_.size(), options_));
       work_ += 3 * (2 + 2 * m) * (m + 1);  // the slabs' x-edges against every box
       oriented_start_ = start_;
       plan_ = DecomposeOriented(room_, objects_, bumps_, &oriented_start_, radius_m_, options_, swap_);
