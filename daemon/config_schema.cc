@@ -73,6 +73,16 @@ options::Table<RecordSettings> RecordKeys() {
   return kKeys;
 }
 
+// "[i]what". Appended, not "[" + std::string: GCC 12 at -O3 reports a false
+// -Wrestrict for a literal + std::string (GCC PR 105329), which fails a Release
+// build with warnings as errors.
+std::string Indexed(size_t i, const char* what) {
+  std::string s = "[";
+  s += std::to_string(i);
+  s += what;
+  return s;
+}
+
 // "" or "KEY what" for a value that is not [x_m, y_m, theta_rad] x 7.
 std::string ReadMounts(const json& m, robot::CoreOptions* o) {
   if (!m.is_array()) return " must be an array";
@@ -80,7 +90,7 @@ std::string ReadMounts(const json& m, robot::CoreOptions* o) {
   for (size_t i = 0; i < m.size(); ++i) {
     const json& p = m[i];
     if (!p.is_array() || p.size() != 3 || !p[0].is_number() || !p[1].is_number() || !p[2].is_number()) {
-      return "[" + std::to_string(i) + "] must be [x_m, y_m, theta_rad]";
+      return Indexed(i, "] must be [x_m, y_m, theta_rad]");
     }
     o->slam.mounts[i] = {p[0].get<double>(), p[1].get<double>(), p[2].get<double>()};
   }
@@ -93,7 +103,7 @@ std::string ReadIrTable(const json& t, robot::CoreOptions* o) {
   for (size_t i = 0; i < t.size(); ++i) {
     const json& p = t[i];
     if (!p.is_array() || p.size() != 2 || !p[0].is_number() || !p[1].is_number()) {
-      return "[" + std::to_string(i) + "] must be [distance_m, volts]";
+      return Indexed(i, "] must be [distance_m, volts]");
     }
     table.emplace_back(p[0].get<double>(), p[1].get<double>());
   }
@@ -119,7 +129,7 @@ std::string ReadGpioLine(const json& j, drivers::GpioLineSpec* out) {
       if (!v.is_boolean()) return ".active_low must be true or false";
       out->active_low = v.get<bool>();
     } else {
-      return "." + OneLine(k) + " is not a known key";
+      return std::string(".").append(OneLine(k)).append(" is not a known key");
     }
   }
   if (!out->chip.empty() && out->line.empty()) return ".line must be given when chip is";
