@@ -53,6 +53,8 @@ options::Table<MissionOptions> MissionKeys() {
        "longest control step the acceleration limit allows for"},
       {"mode", &O::mode, 0, 0, "",
        "explore: map the room; clean: map it, clean the floor, return to the start"},
+      {"clean_at_time_limit", &O::clean_at_time_limit, 0, 0, "",
+       "mode clean: at max_time_s with the room modelled, clean it as modelled (false: end)"},
   };
   return kKeys;
 }
@@ -137,6 +139,7 @@ void Mission::Reset(double t) {
   checked_lines_.clear();
   resume_cleaning_.reset();
   remodel_after_clean_ = false;
+  explore_timed_out_ = false;
 }
 
 void Mission::WatchChanges(const slam::Slam& slam, const std::vector<TimedPose>& trajectory) {
@@ -421,6 +424,22 @@ void Mission::RestoreMapOnEnd() {
   give_up_after_adoption_ = true;
 }
 
+bool Mission::CleanAtTimeLimit(double t) {
+  const bool exploring = state_ == MissionState::kModel || state_ == MissionState::kGoToP1 ||
+                         state_ == MissionState::kContourFollow;
+  if (!clean_mode_ || !options_.clean_at_time_limit || explore_timed_out_ || !exploring ||
+      !modeler_.model().room.box)
+    return false;
+  explore_timed_out_ = true;
+  for (const ObjectModel& o : modeler_.model().objects) {
+    if (!o.complete && !o.given_up) modeler_.GiveUp(o.id, "mission time limit reached");
+  }
+  survey_.Exhaust();
+  // StepModel, in this same period, plans the cleaning (Finish).
+  Enter(MissionState::kModel, t, "mission time limit reached: cleaning the room as modelled");
+  return true;
+}
+
 bool Mission::Watchdogs(double t, const slam::Slam& slam) {
   // (Relocalising again while cleaning, and modelling a moved piece after it,
   // count as cleaning: its own time limit.)
@@ -429,6 +448,7 @@ bool Mission::Watchdogs(double t, const slam::Slam& slam) {
                         remodel_after_clean_;
   if (cleaning ? t - clean_started_ > options_.cleaning.max_time_s
                : t - started_at_ > options_.max_time_s) {
+    if (!cleaning && CleanAtTimeLimit(t)) return true;
     if (cleaning) clean_.SetState(CleanState::kStopped, t, slam.distance_m());
     RestoreMapOnEnd();
     Enter(MissionState::kIdle, t, cleaning ? "cleaning time limit reached" : "mission time limit reached");
@@ -519,6 +539,7 @@ WheelCommand Mission::StepModel(double t, const slam::Slam& slam) {
   // Paper §5: model the room from the line map, then complete what is incomplete.
   const EnvironmentModel& m = modeler_.Update(slam.map_lines(), slam.map_trajectory());
   if (!options_.explore) return Finish(t, slam, m, "room modelled (exploration off)");
+  if (explore_timed_out_) return Finish(t, slam, m, "mission time limit reached: cleaning the room as modelled");
   if (m.pending() == 0 && survey_.Wanted(m) && StartSurvey(t, slam, m)) return Halt();
   if (m.pending() == 0) {
     int complete = 0;

@@ -28,6 +28,9 @@
 //   clean           every cell swept or given up             return_home     "cleaned: ..."
 //   return_home     at the start pose                        done            "cleaned ..., back home"
 //   return_home     no way home after home_attempts plans    done            "cleaned ...; home: why"
+//   model, go_to_p1, contour_follow  mission time limit, mode clean, room modelled
+//                                    (clean_at_time_limit) -> model -> clean
+//                   "mission time limit reached: cleaning the room as modelled" (pending objects given up)
 // (clean and return_home: time limit [cleaning].max_time_s from entering clean.)
 //
 // In a saved map (issue 14; relocalize.h):
@@ -92,6 +95,10 @@ struct MissionOptions {
   LoopOptions loop;                 // [mission] too
   BumpMemoryOptions bump;           // [mission] too
   std::string mode = "explore";     // explore: map the room; clean: map, clean, go home
+  // Mode clean: the exploration reaching max_time_s with the room modelled (the
+  // loop closed) cleans the room as it is modelled - the objects still pending
+  // given up - instead of ending without cleaning. false: it ends (as in mode explore).
+  bool clean_at_time_limit = true;
   CleaningOptions cleaning;         // [cleaning]
   RelocalizeOptions relocalize;     // [relocalize]
 };
@@ -200,6 +207,10 @@ class Mission {
   }
   // Time limit and progress watchdog; false if the mission was ended.
   bool Watchdogs(double t, const slam::Slam& slam);
+  // The exploration's time limit in mode clean with the room modelled: the model
+  // is to be cleaned as it is (clean_at_time_limit; once). False: the limit ends
+  // the mission as ever.
+  bool CleanAtTimeLimit(double t);
   WheelCommand StepWallFollow(double t, double dt, const slam::Slam& slam, const RangeScan& scan,
                               bool bumped);
   WheelCommand StepModel(double t, const slam::Slam& slam);
@@ -302,6 +313,7 @@ class Mission {
   bool give_up_after_adoption_ = false;  // the adoption restores the map; then idle
   std::string clean_summary_;
   bool remodel_after_clean_ = false;  // cleaned; modelling a moved piece before going home
+  bool explore_timed_out_ = false;    // clean_at_time_limit: the model is cleaned as it is
   double last_distance_ = 0;  // travelled, at the last step
 };
 
