@@ -680,6 +680,7 @@ std::string Mission::CleaningReason() const {
     what += " (resumed: " + std::to_string(clean_.resumed_cells()) + " done before" +
             (clean_.replanned_same() ? ", same plan)" : ")");
   }
+  if (explore_timed_out_) what += "; the room as modelled at the mission time limit";
   return what;
 }
 

@@ -229,8 +229,17 @@ TEST(CleanModeTest, TheExplorationTimeLimitAfterTheRoomWasModelledStillCleans) {
   o.mission.mode = "clean";
   o.mission.max_time_s = to_piece_s + 20;  // cut while it goes to the first piece
   // (Its reason, "mission time limit reached: cleaning the room as modelled",
-  // lasts no period: the cleaning is planned in the same one. The notes tell.)
-  sim::InProcessRun run = sim::RunInProcess(world, o, 1, 4500);
+  // lasts no period: the cleaning is planned in the same one, whose reason says it.)
+  std::string cleaning_reason;
+  control::MissionState last = control::MissionState::kIdle;
+  sim::InProcessRun run = sim::RunInProcess(world, o, 1, 4500, [&](const sim::InProcessRun& r) {
+    if (r.core->state() == control::MissionState::kClean && last != control::MissionState::kClean)
+      cleaning_reason = r.core->Status(r.t).mission.reason;
+    last = r.core->state();
+  });
+  EXPECT_EQ(cleaning_reason.find("cleaning "), 0u) << cleaning_reason;
+  EXPECT_NE(cleaning_reason.find("; the room as modelled at the mission time limit"), std::string::npos)
+      << cleaning_reason;
   EXPECT_EQ(run.core->state(), control::MissionState::kDone) << run.core->Status(run.t).mission.reason;
   const nlohmann::json map = ToJson(run.core->Map());
   ASSERT_TRUE(map.contains("cleaning"));
