@@ -163,7 +163,10 @@ std::optional<RecordHeader> ParseRecordHeader(std::string_view comment) {
     if (eq == std::string_view::npos) return std::nullopt;
     const std::string_view key = tok.substr(0, eq), value = tok.substr(eq + 1);
     if (key == "origin") {
-      origin = ParseStamp("(" + std::string(value) + ")", &h.origin_ns);
+      // (Appended, not "(" + std::string: GCC PR 105329, see CMakeLists.txt.)
+      std::string stamp = "(";
+      stamp.append(value).append(")");
+      origin = ParseStamp(stamp, &h.origin_ns);
     } else if (key == "time_scale" || key == "period_s") {
       double v = 0;
       const auto r = std::from_chars(value.data(), value.data() + value.size(), v);
