@@ -116,14 +116,14 @@ std::vector<CoverageCell> Decompose(const Box& free, const std::vector<Box>& obs
 std::vector<Eigen::Vector2d> SweepRoute(const CoverageCell& cell, double spacing_m, bool mirror_x,
                                         bool mirror_y, bool edge_pass = true, double edge_out_m = 0);
 
-// The whole plan from the room model (map frame), contacts (map frame) and where
-// the robot stands (map frame).
 // The contacts a plan goes round are the latest max_bump_obstacles of those
 // remembered (oldest first): the index of the first of them among n.
 inline size_t FirstPlannedContact(size_t n, const CleaningOptions& o) {
   return n - std::min(n, static_cast<size_t>(std::max(0, o.max_bump_obstacles)));
 }
 
+// The whole plan from the room model (map frame), contacts (map frame) and where
+// the robot stands (map frame).
 CoveragePlan PlanCoverage(const Box& room, const std::vector<Box>& objects,
                           const std::vector<Eigen::Vector2d>& bumps, const Eigen::Vector2d& start,
                           double robot_radius_m, const CleaningOptions& options);

@@ -87,7 +87,8 @@ nlohmann::json Daemon::Start(const rpc::Request& req) {
   maps_.OnMissionStarted();
   // For irslam-replay (docs/replay.md): the mode goes with the start.
   if (recorder_) recorder_->Note(core_->clean_mode() ? "start_clean" : "start", now);
-  std::fprintf(stderr, "<6>irslamd: mission started (mode %s, %s)\n", mode.c_str(), StartLogText(core_->last_start()));
+  std::fprintf(stderr, "<6>irslamd: mission started (mode %s, %s)\n", mode.c_str(),
+               StartLogText(core_->last_start()));
   return rpc::MakeResult(req.id, {{"state", control::ToString(core_->state())}});
 }
 
