@@ -33,6 +33,7 @@ GoToOptions CleaningGoTo(GoToOptions g, const CleaningOptions& c) {
   g.boxed_in_contacts_m = c.boxed_in_contacts_m;
   g.under_body_contacts_m = c.under_body_contacts_m;
   g.boxed_in_corners = c.boxed_in_corners;
+  g.boxed_in_trail_m = c.boxed_in_trail_m;
   return g;
 }
 

@@ -64,6 +64,8 @@ options::Table<CleaningOptions> CleaningKeys() {
        "cleaning: plans leave out remembered contacts closer than this to the robot, under its body (0: never)"},
       {"boxed_in_corners", &O::boxed_in_corners, 0, 0, "",
        "cleaning: no way found: plan again with mapped sides that meet at a corner extended only to it"},
+      {"boxed_in_trail_m", &O::boxed_in_trail_m, 0, 100, "m",
+       "cleaning: still no way: plan again along the robot's own path of the last this many metres (0: never)"},
       {"max_goal_failures", &O::max_goal_failures, 1, 1000, "",
        "route points given up in a row in one cell before the rest of it is reported unreachable"},
       {"max_time_s", &O::max_time_s, 1, 1e6, "s", "cleaning plus going home, robot time"},

@@ -66,6 +66,9 @@ struct CleaningOptions {
   // ... and no way found: plan again with sides extended only to their corners
   // (GoToOptions::boxed_in_corners).
   bool boxed_in_corners = true;
+  // ... and still none: plan once more letting the way out follow the robot's
+  // own path of the last this many metres (GoToOptions::boxed_in_trail_m; 0: never).
+  double boxed_in_trail_m = 10;
   int max_goal_failures = 4;       // route points given up in a row: the rest of the cell is given up
   double max_time_s = 3600;        // cleaning plus going home, robot time
   double home_tolerance_m = 0.05;  // home is reached within this

@@ -127,6 +127,10 @@ void ExtendedSides(const std::vector<slam::LineFeature>& lines, double extension
   }
 }
 
+namespace {
+constexpr size_t kMaxTrailPoints = 2000;
+}  // namespace
+
 bool GoTo::TryGoal(double t, const Eigen::Vector2d& goal, double heading, bool align,
                    const slam::Slam& slam, const BumpMemory& bumps) {
   p1_ = goal;
@@ -134,6 +138,7 @@ bool GoTo::TryGoal(double t, const Eigen::Vector2d& goal, double heading, bool a
   align_ = align;
   drop_contacts_ = false;
   to_corners_ = false;
+  along_trail_ = false;
   PathPlanner::Progress p = Replan(t, slam, RangeScan{}, bumps);
   while (p == PathPlanner::Progress::kFailed && Loosen(slam, bumps)) p = Replan(t, slam, RangeScan{}, bumps);
   // Still searching: no path yet (not the last goal's either): Step waits for it.
@@ -197,6 +202,21 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
     const Eigen::Vector2d w = Eigen::Vector2d(me.x, me.y) + RotateVector(r, me.theta);
     obstacles.push_back({w, w});
   }
+  // The robot's own path, back from where it is, boxed_in_trail_m of it.
+  trail_.clear();
+  if (along_trail_) {
+    trail_.push_back({me.x, me.y});
+    const auto& traj = slam.trajectory();
+    double len = 0;
+    // (at most kMaxTrailPoints samples: a robot turning on the spot adds samples, not length)
+    for (auto it = traj.rbegin(); it != traj.rend() && len < o.boxed_in_trail_m && trail_.size() < kMaxTrailPoints;
+         ++it) {
+      const Eigen::Vector2d q(it->pose.x, it->pose.y);
+      len += (q - trail_.back()).norm();
+      trail_.push_back(q);
+    }
+  }
+  planner_.SetFreeTrail(trail_);
   PlannerOptions po = o.planner;
   po.inflation_m = radius_m_ + o.clearance_m;
   po.hard_m = radius_m_ + o.hard_clearance_m;
@@ -210,8 +230,12 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
 
 bool GoTo::Loosen(const slam::Slam& slam, const BumpMemory& bumps) {
   if (DropNearContacts(slam, bumps)) return true;
-  if (to_corners_ || !options_.boxed_in_corners) return false;
-  to_corners_ = true;
+  if (!to_corners_ && options_.boxed_in_corners) {
+    to_corners_ = true;
+    return true;
+  }
+  if (along_trail_ || options_.boxed_in_trail_m <= 0) return false;
+  along_trail_ = true;
   return true;
 }
 

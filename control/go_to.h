@@ -76,6 +76,15 @@ struct GoToOptions {
   // plan, the cleaning campaign touched 27 % more). Off while exploring (no
   // key; cleaning sets it, CleaningOptions::boxed_in_corners).
   bool boxed_in_corners = false;
+  // ... and still no way: plan again (for the rest of this goal) letting the
+  // path follow the robot's own path of the last boxed_in_trail_m metres,
+  // whatever the map says is beside it (PathPlanner::SetFreeTrail): the robot
+  // came in that way. A side seen short and planned round extended past its
+  // end can close the gap the robot drove through into a pocket (the edge pass
+  // of a cleaning goes round pieces of furniture by the room model, not by
+  // plans); every plan out then failed at once. 0: never (exploring: no key;
+  // cleaning sets it, CleaningOptions::boxed_in_trail_m).
+  double boxed_in_trail_m = 0;
   double hard_clearance_m = 0.02;  // never plan closer than robot radius + this
   double keep_path_ratio = 1.25;   // keep the current path while shorter than ratio * new + slack
   double keep_path_slack_m = 0.2;
@@ -209,7 +218,8 @@ class GoTo {
   bool WithinDropped(const Eigen::Vector2d& contact, const Eigen::Vector2d& at) const;
   // No way found: the next plan of this goal may leave more out - first the
   // contacts close by (DropNearContacts), then the extensions past corners
-  // (boxed_in_corners). False when nothing is left to leave out.
+  // (boxed_in_corners), then the robot's own path is free (boxed_in_trail_m).
+  // False when nothing is left to leave out.
   bool Loosen(const slam::Slam& slam, const BumpMemory& bumps);
 
   GoToOptions options_;
@@ -248,6 +258,9 @@ class GoTo {
   Eigen::Vector2d drop_at_ = Eigen::Vector2d::Zero();
   // This goal's plans extend sides only to their corners (Loosen).
   bool to_corners_ = false;
+  // This goal's plans may follow the robot's own recent path (Loosen).
+  bool along_trail_ = false;
+  std::vector<Eigen::Vector2d> trail_;  // its points (internal frame), buffer reused
   double progress_t_ = -1;  // got go_to_progress_m further at this time ...
   Eigen::Vector2d progress_at_ = Eigen::Vector2d::Zero();  // ... from here
 };

@@ -172,7 +172,7 @@ bool PathPlanner::SearchSome(int64_t max_pops, int64_t* pops) {
       // of a tight spot; within hard_m only moving away from the obstacle (the
       // robot may stand that close to where a mapped side is assumed to go on).
       const float cj = clear_[static_cast<size_t>(j)];
-      if (cj < o.inflation_m) {
+      if (cj < o.inflation_m && !OnTrail(j)) {
         if (H(jx - sx, jy - sy) * o.resolution_m > o.inflation_m + o.resolution_m) continue;
         if (cj < o.hard_m && cj < clear_[static_cast<size_t>(i)]) continue;
       }
@@ -304,7 +304,7 @@ PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
     return Progress::kFailed;
   }
   const int s = sy * nx + sx, goal_i = gy * nx + gx;
-  if (failed_valid_ && failed_start_ == s && failed_hard_m_ == o.hard_m &&
+  if (failed_valid_ && failed_start_ == s && failed_hard_m_ == o.hard_m && trail_.empty() &&
       G(gx, gy) >= 1e18) {
     // The last search from here visited every cell that can be reached: not this one.
     ++stats_.failed;
@@ -323,12 +323,50 @@ PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
     for (size_t k = 0; k < cells_.n; ++k) cells_[k].stamp = 0;
     gen_ = 1;
   }
+  MarkTrail();
   open_.clear();
   Cell(sx, sy) = {0, -1, gen_};
   open_.push({H(sx - gx, sy - gy), s});
   search_pops_ = 0;
   running_ = true;
   return Progress::kRunning;
+}
+
+void PathPlanner::SetFreeTrail(const std::vector<Eigen::Vector2d>& trail, double max_step_m) {
+  if (trail.empty() && trail_.empty()) return;
+  trail_.clear();
+  for (size_t k = 0; k < trail.size(); ++k) {
+    if (k > 0 && (trail[k] - trail[k - 1]).norm() > max_step_m)
+      trail_.push_back(Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN()));
+    trail_.push_back(trail[k]);
+  }
+  failed_valid_ = false;  // a failed search's reach says nothing about one along the trail
+}
+
+void PathPlanner::MarkTrail() {
+  if (trail_.empty()) return;
+  const Grid grid{geo_.lo, geo_.nx, geo_.ny, geo_.res};
+  const size_t n = static_cast<size_t>(geo_.nx) * static_cast<size_t>(geo_.ny);
+  if (trail_mark_.size() < n) trail_mark_.assign(n, 0);
+  if (gen_ == 1) std::fill(trail_mark_.begin(), trail_mark_.end(), 0u);  // the stamps wrapped
+  const auto mark = [&](const Eigen::Vector2d& p) {
+    const auto [cx, cy] = grid.Cell(p);
+    for (int y = std::max(0, cy - 1); y <= std::min(geo_.ny - 1, cy + 1); ++y)
+      for (int x = std::max(0, cx - 1); x <= std::min(geo_.nx - 1, cx + 1); ++x)
+        trail_mark_[static_cast<size_t>(y) * static_cast<size_t>(geo_.nx) + static_cast<size_t>(x)] = gen_;
+  };
+  for (size_t k = 0; k < trail_.size(); ++k) {
+    if (std::isnan(trail_[k].x())) continue;
+    if (k == 0 || std::isnan(trail_[k - 1].x())) {
+      mark(trail_[k]);
+      continue;
+    }
+    // The segment from the previous point, every half cell.
+    const Eigen::Vector2d a = trail_[k - 1], d = trail_[k] - a;
+    const int steps = std::max(1, static_cast<int>(std::ceil(d.norm() / (0.5 * geo_.res))));
+    for (int i = 1; i <= steps; ++i) mark(a + d * (static_cast<double>(i) / steps));
+  }
+  start_cells_ += static_cast<int64_t>(trail_.size()) * 9 * 2;
 }
 
 PathPlanner::Progress PathPlanner::Continue(int64_t max_pops, int64_t* pops) {

@@ -76,6 +76,13 @@ class PathPlanner {
   Progress Start(const std::vector<Obstacle>& obstacles, const Eigen::Vector2d& start,
                  const Eigen::Vector2d& goal, const PlannerOptions& options,
                  size_t n_static = static_cast<size_t>(-1));
+  // Cells along this trail (points of the robot's own recent path, in order)
+  // may be crossed whatever their clearance, by the searches started from now
+  // on: the robot's body has been there. A robot that drove into a pocket the
+  // map closes (a side seen short and planned round extended past its end)
+  // finds its way out the way it came. Consecutive points farther apart than
+  // max_step_m (a jump of the pose) break the trail. Empty: none (the default).
+  void SetFreeTrail(const std::vector<Eigen::Vector2d>& trail, double max_step_m = 0.3);
   // Runs the search started for at most max_pops pops (adds them to *pops).
   Progress Continue(int64_t max_pops, int64_t* pops);
   bool running() const { return running_; }
@@ -113,7 +120,14 @@ class PathPlanner {
                         double inflation_m);
   void GrowHypot(int nx, int ny);
 
+  // Marks the trail's cells (3 x 3 round each point, the points joined every
+  // half cell) with the search's stamp gen_ in trail_mark_.
+  void MarkTrail();
+  bool OnTrail(int j) const { return !trail_.empty() && trail_mark_[static_cast<size_t>(j)] == gen_; }
+
   Geometry geo_;
+  std::vector<Eigen::Vector2d> trail_;  // SetFreeTrail's, broken at jumps: pieces end at a NaN point
+  std::vector<uint32_t> trail_mark_;    // per cell (row-major): gen_ when on the trail
   std::vector<Obstacle> obstacles_;   // the static obstacles fixed_clear_ was made from
   std::vector<Obstacle> transient_;   // ... and the transient ones clear_ adds
   double clear_inflation_m_ = -1;

@@ -432,6 +432,60 @@ TEST(PathPlannerTest, ReusesItsGridsAndKnowsWhatTheLastFailedSearchCouldNotReach
   EXPECT_EQ(planner.stats().known_unreachable, 1u);
 }
 
+// A robot that drove into a pocket the map closes (seed 1017's cleaning: a
+// side seen short, extended past its end, leaves less than the robot's width
+// to the wall) plans out along its own path; a trail broken by a jump of the
+// pose does not count as a way.
+TEST(PathPlannerTest, ItsOwnTrailLeadsOutOfAPocketTheMapCloses) {
+  PlannerOptions po;
+  po.inflation_m = 0.25;
+  po.hard_m = 0.19;
+  // A room 4 x 3 m; a pocket in its top-left corner closed by a side at x = 1
+  // from y = 1.5 to 2.64 and one along y = 1.5: 0.36 m to the top wall.
+  const std::vector<Obstacle> obs = {{{0, 0}, {4, 0}},     {{4, 0}, {4, 3}},   {{4, 3}, {0, 3}},
+                                     {{0, 3}, {0, 0}},     {{1, 1.5}, {1, 2.64}}, {{0, 1.5}, {1, 1.5}}};
+  const Eigen::Vector2d start(0.5, 2.1), goal(3, 1);
+  PathPlanner planner;
+  EXPECT_FALSE(planner.Plan(obs, start, goal, po)) << "the gap is narrower than twice the hard distance";
+  // It came in from the room through the gap, along y = 2.82 there (0.18 m
+  // from the wall and from the side's end; the trail is back from the robot).
+  // Sampled every 5 cm, as a trajectory is (0.25 s apart at <= 0.2 m/s).
+  const auto sampled = [](const std::vector<Eigen::Vector2d>& corners) {
+    std::vector<Eigen::Vector2d> out = {corners.front()};
+    for (size_t k = 1; k < corners.size(); ++k) {
+      const Eigen::Vector2d a = corners[k - 1], d = corners[k] - a;
+      const int n = static_cast<int>(std::ceil(d.norm() / 0.05));
+      for (int i = 1; i <= n; ++i) out.push_back(a + d * (static_cast<double>(i) / n));
+    }
+    return out;
+  };
+  planner.SetFreeTrail(sampled({start, {0.5, 2.82}, {1.2, 2.82}, {1.5, 2.6}, {2.0, 2.2}}));
+  const auto path = planner.Plan(obs, start, goal, po);
+  ASSERT_TRUE(path);
+  EXPECT_EQ(path->front(), start);
+  EXPECT_EQ(path->back(), goal);
+  // Out through the gap: where it crosses x = 1 it is above the side's end.
+  bool crossed = false;
+  for (size_t k = 1; k < path->size(); ++k) {
+    const Eigen::Vector2d a = (*path)[k - 1], b = (*path)[k];
+    if ((a.x() - 1) * (b.x() - 1) > 0 || a.x() == b.x()) continue;
+    const double y = a.y() + (b.y() - a.y()) * (1 - a.x()) / (b.x() - a.x());
+    EXPECT_GT(y, 2.64) << "through the side";
+    EXPECT_LT(y, 3.0);
+    crossed = true;
+  }
+  EXPECT_TRUE(crossed);
+  // The same trail with a jump across the gap (0.9 -> 1.5): no way.
+  std::vector<Eigen::Vector2d> jump = sampled({start, {0.5, 2.82}, {0.9, 2.82}});
+  for (const auto& p : sampled({{1.5, 2.6}, {2.0, 2.2}})) jump.push_back(p);
+  planner.SetFreeTrail(jump);
+  EXPECT_FALSE(planner.Plan(obs, start, goal, po));
+  // No trail: no way again, the plans as before.
+  planner.SetFreeTrail({});
+  EXPECT_FALSE(planner.Plan(obs, start, goal, po));
+  EXPECT_TRUE(planner.Plan(obs, {3, 2}, goal, po));
+}
+
 // Issue 15: a search run in pieces of a few pops finds the very path the
 // one-shot search finds, and a failed one fails the same (and is then known).
 TEST(PathPlannerTest, ASearchRunInPiecesIsTheOneShotSearch) {
