@@ -154,6 +154,9 @@ bool PathPlanner::SearchSome(int64_t max_pops, int64_t* pops) {
   const int sx = sx_, sy = sy_, gx = gx_, gy = gy_, goal_i = goal_i_;
   const auto h = [&](int i) { return H(i % nx - gx, i / nx - gy); };
   const int dx[8] = {1, -1, 0, 0, 1, 1, -1, -1}, dy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
+  // The clearances are floats, those beyond the inflation stored as the float
+  // nearest it, which may lie below the double (0.19 does): compared as floats.
+  const float inflation = static_cast<float>(o.inflation_m);
   for (int64_t popped = 0; !open_.empty(); ++popped) {
     if (popped >= max_pops) return false;
     const auto [f, i] = open_.pop();
@@ -172,7 +175,7 @@ bool PathPlanner::SearchSome(int64_t max_pops, int64_t* pops) {
       // of a tight spot; within hard_m only moving away from the obstacle (the
       // robot may stand that close to where a mapped side is assumed to go on).
       const float cj = clear_[static_cast<size_t>(j)];
-      if (cj < o.inflation_m && !OnTrail(j)) {
+      if (cj < inflation && !OnTrail(j)) {
         if (H(jx - sx, jy - sy) * o.resolution_m > o.inflation_m + o.resolution_m) continue;
         if (cj < o.hard_m && cj < clear_[static_cast<size_t>(i)]) continue;
       }
@@ -299,7 +302,7 @@ PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
   const auto [sx, sy] = grid.Cell(start);
   const auto [gx, gy] = grid.Cell(goal);
   if (gx < 0 || gy < 0 || gx >= nx || gy >= ny ||
-      clear_[static_cast<size_t>(gy * nx + gx)] < o.inflation_m) {
+      clear_[static_cast<size_t>(gy * nx + gx)] < static_cast<float>(o.inflation_m)) {
     ++stats_.failed;
     return Progress::kFailed;
   }

@@ -432,6 +432,20 @@ TEST(PathPlannerTest, ReusesItsGridsAndKnowsWhatTheLastFailedSearchCouldNotReach
   EXPECT_EQ(planner.stats().known_unreachable, 1u);
 }
 
+// The clearance grid holds floats: a cell with nothing within the inflation
+// holds the float nearest it, and 0.19 as a float lies below 0.19 as a double.
+// Compared as doubles every cell was blocked and every plan failed at once (a
+// cleaning with clearance_m 0.04: its go-to's inflation is 0.17 + 0.02).
+TEST(PathPlannerTest, AnInflationWhoseFloatLiesBelowItStillPlans) {
+  for (const double inflation : {0.17 + 0.02, 0.19, 0.2, 0.25, 0.23}) {
+    PlannerOptions po;
+    po.inflation_m = inflation;
+    po.hard_m = 0.18;
+    const std::vector<Obstacle> obs = {{{0, 0}, {4, 0}}, {{4, 0}, {4, 3}}, {{4, 3}, {0, 3}}, {{0, 3}, {0, 0}}};
+    EXPECT_TRUE(PlanPath(obs, {1, 1}, {3, 2}, po)) << inflation;
+  }
+}
+
 // A robot that drove into a pocket the map closes (seed 1017's cleaning: a
 // side seen short, extended past its end, leaves less than the robot's width
 // to the wall) plans out along its own path; a trail broken by a jump of the
