@@ -146,6 +146,7 @@ void Clean::Begin(double t, const slam::Slam& slam, const EnvironmentModel& m, c
   cell_ = 0;
   point_ = 0;
   failures_ = 0;
+  no_plan_at_.reset();
   start_distance_ = slam.distance_m();
   cross_sq_ = 0;
   cross_n_ = 0;

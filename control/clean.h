@@ -155,8 +155,8 @@ class Clean {
   // boundary where it is that wide (the route points of a pushed-out edge pass
   // lie outside it).
   Eigen::Vector2d IntoCell(const Eigen::Vector2d& p) const;
-  // Gives the current route point up.
-  void SkipPoint();
+  // Gives the current route point up; counted: towards max_goal_failures.
+  void SkipPoint(bool counted = true);
   double RemainingRoute() const;
   // The share of the current cell's area that a length of its route sweeps.
   double AreaShare(double length_m) const;
@@ -198,6 +198,9 @@ class Clean {
   size_t cell_ = 0;   // position in the tour
   size_t point_ = 0;  // the route point driven to
   int failures_ = 0;  // in this cell
+  // Where the last route point that could not be planned to was given up
+  // (none: no such point since Begin).
+  std::optional<Eigen::Vector2d> no_plan_at_;
   double start_distance_ = 0;
   double progress_t_ = 0;  // got 0.1 m further at this time ...
   Eigen::Vector2d progress_at_ = Eigen::Vector2d::Zero();  // ... from here

@@ -32,12 +32,12 @@ Eigen::Vector2d Clean::IntoCell(const Eigen::Vector2d& p) const {
   return plan_.swapped ? Eigen::Vector2d(best.y(), best.x()) : best;
 }
 
-void Clean::SkipPoint() {
+void Clean::SkipPoint(bool counted) {
   // The segment to the point given up is not swept.
   const auto& r = plan_.routes[cell_];
   if (point_ >= 1 && point_ < r.size())
     progress_.unreachable_m2 += AreaShare((r[point_] - r[point_ - 1]).norm());
-  ++failures_;
+  if (counted) ++failures_;
   ++point_;
   if (failures_ >= options_.max_goal_failures || point_ >= plan_.routes[cell_].size()) {
     NextCell(true);
@@ -148,7 +148,14 @@ Clean::Result Clean::StepPlanGoal(double t, const Pose2& me, double rot, const s
       return {};
     }
   }
-  SkipPoint();
+  // Not counted when the last point that could not be planned to was given up
+  // from here too: the robot has not moved, so what failed is where it stands,
+  // not this point; the next is tried (one a period, each at most three plans).
+  const Eigen::Vector2d here(me.x, me.y);
+  const bool same_spot =
+      options_.no_plan_spot_m > 0 && no_plan_at_ && (here - *no_plan_at_).norm() < options_.no_plan_spot_m;
+  no_plan_at_ = here;
+  SkipPoint(!same_spot);
   return {};
 }
 

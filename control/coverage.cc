@@ -68,6 +68,8 @@ options::Table<CleaningOptions> CleaningKeys() {
        "cleaning: still no way: plan again along the robot's own path of the last this many metres (0: never)"},
       {"max_goal_failures", &O::max_goal_failures, 1, 1000, "",
        "route points given up in a row in one cell before the rest of it is reported unreachable"},
+      {"no_plan_spot_m", &O::no_plan_spot_m, 0, 1, "m",
+       "a route point that cannot be planned to, given up within this of the last such: not counted as a failure (0: counted)"},
       {"max_time_s", &O::max_time_s, 1, 1e6, "s", "cleaning plus going home, robot time"},
       {"home_tolerance_m", &O::home_tolerance_m, 0.01, 1, "m", "home is reached within this"},
       {"home_attempts", &O::home_attempts, 1, 100, "", "plans home before giving up"},

@@ -70,6 +70,11 @@ struct CleaningOptions {
   // own path of the last this many metres (GoToOptions::boxed_in_trail_m; 0: never).
   double boxed_in_trail_m = 10;
   int max_goal_failures = 4;       // route points given up in a row: the rest of the cell is given up
+  // A route point that cannot be planned to, given up within this of where the
+  // last such point was, does not count towards max_goal_failures (the robot
+  // has not moved: where it stands is what fails, not the points; the next is
+  // tried). 0: every one counts.
+  double no_plan_spot_m = 0.1;
   double max_time_s = 3600;        // cleaning plus going home, robot time
   double home_tolerance_m = 0.05;  // home is reached within this
   int home_attempts = 3;           // plans home before giving up
