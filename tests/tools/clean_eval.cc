@@ -1,5 +1,6 @@
 #include "tests/tools/clean_eval.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "daemon/core_json.h"
@@ -24,6 +25,27 @@ std::vector<TimedPose> Between(const std::vector<TimedPose>& v, double t0, doubl
 }
 
 }  // namespace
+
+bool ContactWithClutter(const sim::World& world, double x, double y) {
+  const sim::Vec2 p{x, y};
+  double wall = 1e18;
+  for (size_t k = 0; k < world.outline.size(); ++k) {
+    const sim::Segment side{world.outline[k], world.outline[(k + 1) % world.outline.size()]};
+    sim::Vec2 closest;
+    wall = std::min(wall, sim::PointSegmentDistance(p, side, &closest));
+  }
+  double nearest = wall;
+  bool clutter = false;
+  for (const sim::Box& b : world.objects) {
+    const double dx = std::max({b.xmin - x, 0.0, x - b.xmax}), dy = std::max({b.ymin - y, 0.0, y - b.ymax});
+    const double d = std::hypot(dx, dy);
+    if (d < nearest) {
+      nearest = d;
+      clutter = std::max(b.xmax - b.xmin, b.ymax - b.ymin) <= kClutterSideM;
+    }
+  }
+  return clutter;
+}
 
 CleanScore RunAndScoreClean(const sim::World& world, const robot::CoreOptions& base, uint64_t seed,
                             double max_time_s, bool with_bounce) {
@@ -62,7 +84,11 @@ CleanScore RunAndScoreClean(const sim::World& world, const robot::CoreOptions& b
   s.coverage = cov.fraction;
   s.covered_total = ScoreCoverage(world, radius, true_traj, 0, t_end).fraction;
   s.path_ratio = s.reachable_m2 > 0 ? s.path_m / (s.reachable_m2 / options.mission.cleaning.cleaning_width_m) : 0;
-  for (const auto& c : run.sim->collision_points()) s.contacts_cleaning += c[0] >= t0;
+  for (const auto& c : run.sim->collision_points()) {
+    if (c[0] < t0) continue;
+    ++s.contacts_cleaning;
+    s.contacts_clutter += ContactWithClutter(world, c[1], c[2]);
+  }
   const auto est = ToWorld(run.core->slam().trajectory(), world.start);
   s.rms_position_m = ComparePoses(Between(est, t0, t_end), Between(true_traj, t0, t_end)).rms_position_m;
   if (with_bounce && s.clean_s > 0) {

@@ -34,12 +34,14 @@ std::string Row(const Job& j, const metrics::CleanScore& s) {
     << " % | " << F(s.path_m) << " | " << F(s.path_ratio, 2) << " | " << F(s.clean_s, 0) << " | "
     << s.cells_done << "/" << s.cells << " | " << F(s.unreachable_m2, 2) << " | " << s.contacts_cleaning << " | "
     << F(100 * s.rms_position_m) << " | " << F(100 * s.home_error_m) << " | " << F(100 * s.bounce_coverage)
-    << " % |\n";
+    << " % | " << s.contacts_clutter << " |\n";
   return r.str();
 }
 
 struct Summary {
   int runs = 0, done = 0, cov97 = 0, cov93 = 0, no_contact = 0, pose_ok = 0, home_ok = 0;
+  int no_mapped_contact = 0;  // runs whose contacts were all with clutter (or none)
+  int contacts = 0, clutter = 0;
   double coverage = 0, min_coverage = 1, ratio = 0, bounce = 0;
 };
 
@@ -49,6 +51,9 @@ void Add(Summary* m, const metrics::CleanScore& s) {
   m->cov97 += s.coverage >= 0.97;
   m->cov93 += s.coverage >= 0.93;
   m->no_contact += s.contacts_cleaning == 0;
+  m->no_mapped_contact += s.contacts_cleaning == s.contacts_clutter;
+  m->contacts += s.contacts_cleaning;
+  m->clutter += s.contacts_clutter;
   m->pose_ok += s.rms_position_m <= 0.05;
   m->home_ok += s.home_error_m <= 0.10;
   m->coverage += s.coverage;
@@ -99,8 +104,9 @@ int RunCleanReport(const robot::CoreOptions& options, const std::string& worlds_
 
   std::ostringstream md;
   md << "| world | seed | end | reachable m² | covered (cleaning) | covered (whole run) | estimated | path m | "
-        "path ratio | cleaning s | cells | unreachable m² | contacts | pose RMS cm | end to start cm | bounce |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "path ratio | cleaning s | cells | unreachable m² | contacts | pose RMS cm | end to start cm | bounce | "
+        "contacts with clutter |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   std::vector<std::pair<std::string, Summary>> sums;
   const auto sum_of = [&](const std::string& p) -> Summary& {
     for (auto& [k, v] : sums)
@@ -113,12 +119,14 @@ int RunCleanReport(const robot::CoreOptions& options, const std::string& worlds_
     Add(&sum_of(list[i].profile), scores[i]);
   }
   md << "\n| set | runs | done | mean coverage | worst | >= 97 % | >= 93 % | mean path ratio | no contact | pose RMS "
-        "<= 5 cm | home <= 10 cm | bounce mean |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "<= 5 cm | home <= 10 cm | bounce mean | contacts per run (with clutter) | no contact but with clutter "
+        "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& [k, m] : sums) {
     const double n = std::max(1, m.runs);
     md << "| " << k << " | " << m.runs << " | " << m.done << " | " << F(100 * m.coverage / n) << " % | "
        << F(100 * m.min_coverage) << " % | " << m.cov97 << " | " << m.cov93 << " | " << F(m.ratio / n, 2) << " | "
-       << m.no_contact << " | " << m.pose_ok << " | " << m.home_ok << " | " << F(100 * m.bounce / n) << " % |\n";
+       << m.no_contact << " | " << m.pose_ok << " | " << m.home_ok << " | " << F(100 * m.bounce / n) << " % | "
+       << F(m.contacts / n, 2) << " (" << F(m.clutter / n, 2) << ") | " << m.no_mapped_contact << " |\n";
   }
   std::ofstream out(out_dir + "/cleaning-results.md");
   out << md.str();

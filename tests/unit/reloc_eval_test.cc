@@ -10,6 +10,7 @@
 
 #include "sim/sim_run.h"
 #include "tests/testing/lines.h"
+#include "tests/tools/clean_eval.h"
 #include "tests/tools/reloc_picture.h"
 
 namespace irslam::metrics {
@@ -161,6 +162,23 @@ TEST(RelocEvalTest, FurnitureIsMovedOnlyToAFreePlaceOrAlongItsWall) {
   EXPECT_TRUE(metrics::MoveObject(w, 1, 0, 0.5, 0.45).has_value());
   EXPECT_FALSE(metrics::MoveObject(w, 1, 1.3, 0, 0.45).has_value());
   EXPECT_FALSE(metrics::MoveObject(w, 5, 0.5, 0, 0.45).has_value());  // no such piece
+}
+
+// The cleaning report counts contacts with clutter apart (issue 13: no contact
+// with mapped furniture, clutter contacts counted): what the robot touched is
+// the nearest of the walls and the objects, clutter when no side of it is
+// longer than 10 cm.
+TEST(CleanEvalTest, AContactIsWithClutterWhenTheNearestThingIsALegOrAPost) {
+  sim::World w;
+  w.outline = {{0, 0}, {4, 0}, {4, 3}, {0, 3}};
+  w.objects = {{1, 1, 1.04, 1.05}, {2, 1, 2.8, 1.6}, {3.22, 2.94, 3.28, 3.0}};  // a leg, a table, a post
+  EXPECT_TRUE(metrics::ContactWithClutter(w, 1.02 - 0.19, 1.02));   // beside the leg
+  EXPECT_FALSE(metrics::ContactWithClutter(w, 2.4, 1.6 + 0.17));    // beside the table
+  EXPECT_FALSE(metrics::ContactWithClutter(w, 0.17, 2.0));          // at the left wall
+  // Below the post at the top wall, the post nearer than the wall: the post.
+  EXPECT_TRUE(metrics::ContactWithClutter(w, 3.25, 2.94 - 0.16));
+  // The leg beside the table, the table nearer: the table.
+  EXPECT_FALSE(metrics::ContactWithClutter(w, 1.9 - 0.17, 1.3));
 }
 
 // Boxes that touch are one piece of furniture (the paper's Fig. 16 draws an
