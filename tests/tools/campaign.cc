@@ -19,10 +19,6 @@ namespace irslam::campaign {
 namespace {
 
 constexpr double kDeg = 180.0 / M_PI;
-constexpr double kClutterM = 0.06;  // legs and posts: not furniture the model must find
-
-bool IsClutter(const sim::Box& b) { return b.xmax - b.xmin <= kClutterM + 1e-9 && b.ymax - b.ymin <= kClutterM + 1e-9; }
-
 std::vector<TimedPose> FromJson(const nlohmann::json& arr) {
   std::vector<TimedPose> out;
   for (const auto& p : arr) out.push_back({p[0], {p[1], p[2], p[3]}});
@@ -30,21 +26,10 @@ std::vector<TimedPose> FromJson(const nlohmann::json& arr) {
 }
 
 // Contacts by what the robot touched: the nearest wall or box to the robot's
-// centre at the contact.
+// centre at the contact (metrics::ContactWithClutter).
 void ClassifyContacts(const sim::World& world, const std::vector<std::array<double, 3>>& points, RunScore* s) {
   for (const auto& c : points) {
-    double best = 1e9;
-    bool clutter = false;
-    for (const sim::Box& b : world.objects) {
-      const double dx = std::max({b.xmin - c[1], 0.0, c[1] - b.xmax});
-      const double dy = std::max({b.ymin - c[2], 0.0, c[2] - b.ymax});
-      const double d = std::hypot(dx, dy);
-      if (d < best) best = d, clutter = IsClutter(b);
-    }
-    const sim::Box r = world.Bounds();
-    const double wall = std::min({c[1] - r.xmin, r.xmax - c[1], c[2] - r.ymin, r.ymax - c[2]});
-    if (wall < best) clutter = false;
-    ++(clutter ? s->contacts_clutter : s->contacts_furniture);
+    ++(metrics::ContactWithClutter(world, c[1], c[2]) ? s->contacts_clutter : s->contacts_furniture);
   }
 }
 
@@ -138,7 +123,7 @@ RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::Core
   s.max_position_m = errors.max_position_m;
   s.odom_final_position_m = metrics::ComparePoses(FromJson(truth["odometry"]), FromJson(truth["trajectory"])).final_position_m;
   sim::World furniture = world;
-  furniture.objects.erase(std::remove_if(furniture.objects.begin(), furniture.objects.end(), IsClutter),
+  furniture.objects.erase(std::remove_if(furniture.objects.begin(), furniture.objects.end(), metrics::IsClutter),
                           furniture.objects.end());
   const metrics::ObjectScores objects = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), furniture,
                                                                   2 * options.slam.geometry.radius_m);

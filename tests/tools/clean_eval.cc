@@ -1,6 +1,5 @@
 #include "tests/tools/clean_eval.h"
 
-#include <algorithm>
 #include <cmath>
 
 #include "daemon/core_json.h"
@@ -25,27 +24,6 @@ std::vector<TimedPose> Between(const std::vector<TimedPose>& v, double t0, doubl
 }
 
 }  // namespace
-
-bool ContactWithClutter(const sim::World& world, double x, double y) {
-  const sim::Vec2 p{x, y};
-  double wall = 1e18;
-  for (size_t k = 0; k < world.outline.size(); ++k) {
-    const sim::Segment side{world.outline[k], world.outline[(k + 1) % world.outline.size()]};
-    sim::Vec2 closest;
-    wall = std::min(wall, sim::PointSegmentDistance(p, side, &closest));
-  }
-  double nearest = wall;
-  bool clutter = false;
-  for (const sim::Box& b : world.objects) {
-    const double dx = std::max({b.xmin - x, 0.0, x - b.xmax}), dy = std::max({b.ymin - y, 0.0, y - b.ymax});
-    const double d = std::hypot(dx, dy);
-    if (d < nearest) {
-      nearest = d;
-      clutter = std::max(b.xmax - b.xmin, b.ymax - b.ymin) <= kClutterSideM;
-    }
-  }
-  return clutter;
-}
 
 CleanScore RunAndScoreClean(const sim::World& world, const robot::CoreOptions& base, uint64_t seed,
                             double max_time_s, bool with_bounce) {

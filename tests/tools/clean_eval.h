@@ -15,15 +15,6 @@
 
 namespace irslam::metrics {
 
-// The longest side of an object counted as clutter (the generator's legs and
-// posts are 2-6 cm; its smallest pieces of furniture 30 cm).
-constexpr double kClutterSideM = 0.1;
-
-// Whether a contact with the robot's centre at (x, y) touched clutter: the
-// nearest of the room's walls and the objects is one no side of which exceeds
-// kClutterSideM.
-bool ContactWithClutter(const sim::World& world, double x, double y);
-
 struct CleanScore {
   std::string world;
   uint64_t seed = 0;
@@ -42,10 +33,9 @@ struct CleanScore {
   double unreachable_m2 = 0;
   int cells = 0, cells_done = 0;
   int contacts_cleaning = 0;   // contacts with anything while cleaning or going home
-  // ... of them with clutter: the nearest thing to the robot at the contact is
-  // an object no side of which is longer than kClutterSideM (chair legs, posts:
-  // too thin for the beams, never mapped); the rest touched walls or furniture
-  // (the issue's "no contact with mapped furniture", clutter counted apart).
+  // ... of them with clutter (metrics::ContactWithClutter: chair legs, posts);
+  // the rest touched walls or furniture (the issue's "no contact with mapped
+  // furniture", clutter counted apart).
   int contacts_clutter = 0;
   double rms_position_m = 0;   // pose error while cleaning
   double home_error_m = 0;     // true end position to the true start

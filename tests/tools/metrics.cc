@@ -240,4 +240,28 @@ ObjectScores ScoreObjects(const nlohmann::json& map, const slam::Slam& slam,
   return sc;
 }
 
+bool IsClutter(const sim::Box& b) {
+  return b.xmax - b.xmin <= kClutterM + 1e-9 && b.ymax - b.ymin <= kClutterM + 1e-9;
+}
+
+bool ContactWithClutter(const sim::World& world, double x, double y) {
+  const sim::Vec2 p{x, y};
+  double nearest = 1e18;
+  for (size_t k = 0; k < world.outline.size(); ++k) {
+    const sim::Segment side{world.outline[k], world.outline[(k + 1) % world.outline.size()]};
+    sim::Vec2 closest;
+    nearest = std::min(nearest, sim::PointSegmentDistance(p, side, &closest));
+  }
+  bool clutter = false;
+  for (const sim::Box& b : world.objects) {
+    const double dx = std::max({b.xmin - x, 0.0, x - b.xmax}), dy = std::max({b.ymin - y, 0.0, y - b.ymax});
+    const double d = std::hypot(dx, dy);
+    if (d < nearest) {
+      nearest = d;
+      clutter = IsClutter(b);
+    }
+  }
+  return clutter;
+}
+
 }  // namespace irslam::metrics

@@ -35,6 +35,16 @@ struct PoseErrors {
 };
 
 // Errors of `est` against `truth` (both in the world frame), matched by time.
+// Clutter: an object no side of which is longer than kClutterM (the
+// generator's chair legs and posts, 2-6 cm: too thin for the beams, never
+// mapped, not pieces the model must find).
+constexpr double kClutterM = 0.06;
+bool IsClutter(const sim::Box& b);
+// Whether a contact with the robot's centre at (x, y) touched clutter: the
+// nearest of the room's walls and the objects is clutter (else a wall or a
+// piece of furniture).
+bool ContactWithClutter(const sim::World& world, double x, double y);
+
 PoseErrors ComparePoses(const std::vector<TimedPose>& est, const std::vector<TimedPose>& truth);
 // Position error at time t (nearest samples).
 double PositionErrorAt(const std::vector<TimedPose>& est, const std::vector<TimedPose>& truth, double t);

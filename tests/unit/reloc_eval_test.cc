@@ -10,7 +10,7 @@
 
 #include "sim/sim_run.h"
 #include "tests/testing/lines.h"
-#include "tests/tools/clean_eval.h"
+#include "tests/tools/metrics.h"
 #include "tests/tools/reloc_picture.h"
 
 namespace irslam::metrics {
@@ -167,8 +167,8 @@ TEST(RelocEvalTest, FurnitureIsMovedOnlyToAFreePlaceOrAlongItsWall) {
 // The cleaning report counts contacts with clutter apart (issue 13: no contact
 // with mapped furniture, clutter contacts counted): what the robot touched is
 // the nearest of the walls and the objects, clutter when no side of it is
-// longer than 10 cm.
-TEST(CleanEvalTest, AContactIsWithClutterWhenTheNearestThingIsALegOrAPost) {
+// longer than 6 cm (the generator's legs and posts).
+TEST(ContactsTest, AContactIsWithClutterWhenTheNearestThingIsALegOrAPost) {
   sim::World w;
   w.outline = {{0, 0}, {4, 0}, {4, 3}, {0, 3}};
   w.objects = {{1, 1, 1.04, 1.05}, {2, 1, 2.8, 1.6}, {3.22, 2.94, 3.28, 3.0}};  // a leg, a table, a post
