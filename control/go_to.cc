@@ -89,6 +89,10 @@ options::Table<GoToOptions> GoToKeys() {
 
 namespace {
 
+// The most trajectory samples a plan along the robot's own path takes (a robot
+// turning on the spot adds samples, not length).
+constexpr size_t kMaxTrailPoints = 2000;
+
 double Cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 // How far past end e (outward direction out, a unit vector) the side's line
@@ -126,10 +130,6 @@ void ExtendedSides(const std::vector<slam::LineFeature>& lines, double extension
     sides->push_back({l.p0 - ext0 * d, l.p1 + ext1 * d});
   }
 }
-
-namespace {
-constexpr size_t kMaxTrailPoints = 2000;
-}  // namespace
 
 bool GoTo::TryGoal(double t, const Eigen::Vector2d& goal, double heading, bool align,
                    const slam::Slam& slam, const BumpMemory& bumps) {
@@ -208,7 +208,6 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
     trail_.push_back({me.x, me.y});
     const auto& traj = slam.trajectory();
     double len = 0;
-    // (at most kMaxTrailPoints samples: a robot turning on the spot adds samples, not length)
     for (auto it = traj.rbegin(); it != traj.rend() && len < o.boxed_in_trail_m && trail_.size() < kMaxTrailPoints;
          ++it) {
       const Eigen::Vector2d q(it->pose.x, it->pose.y);

@@ -307,8 +307,8 @@ PathPlanner::Progress PathPlanner::Start(const std::vector<Obstacle>& obstacles,
     return Progress::kFailed;
   }
   const int s = sy * nx + sx, goal_i = gy * nx + gx;
-  if (failed_valid_ && failed_start_ == s && failed_hard_m_ == o.hard_m && trail_.empty() &&
-      G(gx, gy) >= 1e18) {
+  // (A new trail invalidates it: SetFreeTrail.)
+  if (failed_valid_ && failed_start_ == s && failed_hard_m_ == o.hard_m && G(gx, gy) >= 1e18) {
     // The last search from here visited every cell that can be reached: not this one.
     ++stats_.failed;
     ++stats_.known_unreachable;
@@ -343,7 +343,7 @@ void PathPlanner::SetFreeTrail(const std::vector<Eigen::Vector2d>& trail, double
       trail_.push_back(Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN()));
     trail_.push_back(trail[k]);
   }
-  failed_valid_ = false;  // a failed search's reach says nothing about one along the trail
+  failed_valid_ = false;  // a failed search's reach says nothing about one along another trail
 }
 
 void PathPlanner::MarkTrail() {
