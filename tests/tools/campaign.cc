@@ -81,8 +81,10 @@ report::Series Histogram(const std::string& name, const std::string& color, cons
 }  // namespace
 
 RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::CoreOptions& options,
-                     double max_time_s) {
-  const sim::World world = sim::GenerateWorld(seed, profile);
+                     double max_time_s, const std::string& noise_nominal) {
+  sim::World world = sim::GenerateWorld(seed, profile);
+  std::string unused;
+  metrics::SetNoiseNominal(noise_nominal, &world.noise, &unused);
   RunScore s;
   s.seed = seed;
   s.profile = profile;
@@ -138,13 +140,14 @@ RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::Core
 }
 
 std::vector<RunScore> RunCampaign(sim::NoiseProfile profile, uint64_t first_seed, int count,
-                                  const robot::CoreOptions& options, int jobs) {
+                                  const robot::CoreOptions& options, int jobs,
+                                  const std::string& noise_nominal) {
   std::vector<RunScore> out(static_cast<size_t>(std::max(0, count)));
   std::atomic<int> next{0};
   const auto work = [&] {
     for (int i = next++; i < count; i = next++) {
       out[static_cast<size_t>(i)] = RunAndScore(first_seed + static_cast<uint64_t>(i), profile, options,
-                                                options.mission.max_time_s);
+                                                options.mission.max_time_s, noise_nominal);
     }
   };
   std::vector<std::thread> threads;

@@ -44,13 +44,16 @@ struct RunScore {
 };
 
 // One generated world, run and scored. max_time_s: the mission's time limit.
+// noise_nominal: noise keys set back to nominal (metrics::SetNoiseNominal; an
+// ablation), already checked.
 RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::CoreOptions& options,
-                     double max_time_s);
+                     double max_time_s, const std::string& noise_nominal = "");
 
 // Seeds first_seed .. first_seed + count - 1 of one profile on `jobs` threads
 // (the core has no global state); results in seed order.
 std::vector<RunScore> RunCampaign(sim::NoiseProfile profile, uint64_t first_seed, int count,
-                                  const robot::CoreOptions& options, int jobs);
+                                  const robot::CoreOptions& options, int jobs,
+                                  const std::string& noise_nominal = "");
 
 // The rates the targets are stated in (fractions; contacts per run).
 struct Rates {

@@ -9,6 +9,7 @@
 
 #include "sim/generator.h"
 #include "tests/tools/clean_eval.h"
+#include "tests/tools/metrics.h"
 #include "tests/tools/svg_chart.h"
 
 namespace irslam::report {
@@ -66,7 +67,7 @@ void Add(Summary* m, const metrics::CleanScore& s) {
 
 int RunCleanReport(const robot::CoreOptions& options, const std::string& worlds_dir,
                    const std::vector<std::string>& worlds, int seeds, int generated, const std::string& profiles,
-                   uint64_t first_seed, int jobs, const std::string& out_dir) {
+                   uint64_t first_seed, int jobs, const std::string& out_dir, const std::string& noise_nominal) {
   std::vector<Job> list;
   for (const auto& name : worlds) {
     std::string error;
@@ -86,7 +87,10 @@ int RunCleanReport(const robot::CoreOptions& options, const std::string& worlds_
     }
     for (int i = 0; i < generated; ++i) {
       const uint64_t seed = first_seed + static_cast<uint64_t>(i);
-      list.push_back({name + "/" + std::to_string(seed), name, sim::GenerateWorld(seed, *profile), seed});
+      sim::World world = sim::GenerateWorld(seed, *profile);
+      std::string unused;
+      metrics::SetNoiseNominal(noise_nominal, &world.noise, &unused);
+      list.push_back({name + "/" + std::to_string(seed), name, std::move(world), seed});
     }
   }
   std::vector<metrics::CleanScore> scores(list.size());

@@ -13,7 +13,8 @@ namespace irslam::report {
 
 int RunCleanReport(const robot::CoreOptions& options, const std::string& worlds_dir,
                    const std::vector<std::string>& worlds, int seeds, int generated,
-                   const std::string& profiles, uint64_t first_seed, int jobs, const std::string& out_dir);
+                   const std::string& profiles, uint64_t first_seed, int jobs, const std::string& out_dir,
+                   const std::string& noise_nominal = "");
 
 }  // namespace irslam::report
 

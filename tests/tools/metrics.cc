@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
+#include <type_traits>
+#include <variant>
 
 namespace irslam::metrics {
 namespace {
@@ -262,6 +265,27 @@ bool ContactWithClutter(const sim::World& world, double x, double y) {
     }
   }
   return clutter;
+}
+
+bool SetNoiseNominal(const std::string& csv, sim::SimNoise* noise, std::string* error) {
+  const sim::SimNoise nominal;
+  std::stringstream list(csv);
+  for (std::string name; std::getline(list, name, ',');) {
+    if (name.empty()) continue;
+    bool found = false;
+    for (const auto& key : sim::SimNoiseKeys()) {
+      if (key.name != name) continue;
+      found = true;
+      std::visit([&](auto member) {
+        if constexpr (std::is_same_v<decltype(member), double sim::SimNoise::*>) noise->*member = nominal.*member;
+      }, key.member);
+    }
+    if (!found) {
+      *error = "unknown noise key '" + name + "' (the world file's noise keys, contracts §1)";
+      return false;
+    }
+  }
+  return true;
 }
 
 }  // namespace irslam::metrics

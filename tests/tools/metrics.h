@@ -45,6 +45,12 @@ bool IsClutter(const sim::Box& b);
 // piece of furniture).
 bool ContactWithClutter(const sim::World& world, double x, double y);
 
+// An ablation of the error envelope (irslam-report --noise-nominal): each key
+// of `csv` (comma-separated sim::SimNoiseKeys names) set back to its nominal
+// value (sim::SimNoise's default), so a campaign measures what one effect
+// costs. False, and a one-line *error naming the key, for an unknown key.
+bool SetNoiseNominal(const std::string& csv, sim::SimNoise* noise, std::string* error);
+
 PoseErrors ComparePoses(const std::vector<TimedPose>& est, const std::vector<TimedPose>& truth);
 // Position error at time t (nearest samples).
 double PositionErrorAt(const std::vector<TimedPose>& est, const std::vector<TimedPose>& truth, double t);

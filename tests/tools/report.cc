@@ -134,7 +134,7 @@ bool Write(const std::string& path, const std::string& text) {
 }
 
 int RunCampaignReport(const robot::CoreOptions& options, const std::string& profiles, uint64_t first_seed,
-                      int runs, int jobs, const std::string& out_dir) {
+                      int runs, int jobs, const std::string& out_dir, const std::string& noise_nominal) {
   std::vector<std::vector<campaign::RunScore>> by_profile;
   std::stringstream list(profiles);
   for (std::string name; std::getline(list, name, ',');) {
@@ -143,14 +143,15 @@ int RunCampaignReport(const robot::CoreOptions& options, const std::string& prof
       std::fprintf(stderr, "irslam-report: unknown profile '%s' (nominal, realistic, harsh)\n", name.c_str());
       return 2;
     }
-    by_profile.push_back(campaign::RunCampaign(*profile, first_seed, runs, options, jobs));
+    by_profile.push_back(campaign::RunCampaign(*profile, first_seed, runs, options, jobs, noise_nominal));
     const campaign::Rates r = campaign::Summarise(by_profile.back());
     std::fprintf(stderr, "irslam-report: %s: %d runs, done %.1f %%, pieces good %.1f %%, complete %.1f %%, pose ok %.1f %%, lost %.1f %%, contacts/run %.2f\n",
                  name.c_str(), r.runs, 100 * r.done, 100 * r.pieces_good, 100 * r.pieces_complete, 100 * r.pose_ok,
                  100 * r.lost, r.furniture_contacts_per_run);
   }
   const std::string command = "irslam-report --campaign " + std::to_string(runs) + " --profiles " + profiles +
-                              " --first-seed " + std::to_string(first_seed);
+                              " --first-seed " + std::to_string(first_seed) +
+                              (noise_nominal.empty() ? "" : " --noise-nominal " + noise_nominal);
   if (!Write(out_dir + "/robustness.md", campaign::RobustnessReport(by_profile, out_dir, command))) {
     std::fprintf(stderr, "irslam-report: cannot write %s/robustness.md\n", out_dir.c_str());
     return 1;
@@ -268,7 +269,20 @@ int main(int argc, char** argv) {
   app.add_option("--reloc-picture", reloc_picture,
                  "Instead of the accuracy report: an SVG of relocalisation's pose hypotheses at their last "
                  "ambiguous moment, in the first of --reloc-worlds, from --first-seed (docs/relocalization.md)");
+  std::string noise_nominal;
+  app.add_option("--noise-nominal", noise_nominal,
+                 "Campaign: set these world noise keys (comma-separated, contracts §1) back to their nominal "
+                 "values in every generated world: what one effect of the error envelope costs "
+                 "(docs/robustness.md)");
   CLI11_PARSE(app, argc, argv);
+  {
+    sim::SimNoise check;
+    std::string error;
+    if (!metrics::SetNoiseNominal(noise_nominal, &check, &error)) {
+      std::fprintf(stderr, "irslam-report: --noise-nominal: %s\n", error.c_str());
+      return 2;
+    }
+  }
   robot::CoreOptions defaults = robot::DefaultCoreOptions();
   if (!config_path.empty()) {
     std::string error;
@@ -286,9 +300,10 @@ int main(int argc, char** argv) {
   if (mode == "clean") {
     return RunCleanReport(defaults, worlds_dir,
                           {"fig14", "fig16", "fig17", "fig18", "fig19", "fig20", "free_start", "corner_start"},
-                          seeds, campaign_runs, profiles, first_seed, jobs, out_dir);
+                          seeds, campaign_runs, profiles, first_seed, jobs, out_dir, noise_nominal);
   }
-  if (campaign_runs > 0) return RunCampaignReport(defaults, profiles, first_seed, campaign_runs, jobs, out_dir);
+  if (campaign_runs > 0) return RunCampaignReport(defaults, profiles, first_seed, campaign_runs, jobs, out_dir,
+                                                    noise_nominal);
 
   const auto load = [&](const std::string& name) {
     std::string error;

@@ -269,5 +269,30 @@ TEST(RelocPictureTest, EachHypothesisPlacesTheLocalLinesThroughItsTransform) {
   EXPECT_NE(svg.find("the search at 12.5 s, 4.0 m of evidence, 2 hypotheses; committed at 14.0 s"), std::string::npos);
 }
 
+// irslam-report --noise-nominal: the named effects of a drawn error envelope go
+// back to the nominal robot's, the others keep their drawn values, and a key
+// that is not a world-file noise key is refused by name.
+TEST(NoiseAblationTest, NamedKeysGoBackToNominalTheOthersStayAndUnknownKeysAreRefused) {
+  sim::SimNoise n;
+  n.wheel_radius_error_left = 0.008;
+  n.wheel_radius_error_right = -0.004;
+  n.wheel_base_error = 0.015;
+  n.slip_correlation_s = 1.5;
+  n.ir_surface_bias_m = 0.02;
+  std::string error;
+  ASSERT_TRUE(SetNoiseNominal("wheel_radius_error_left,wheel_base_error,slip_correlation_s", &n, &error));
+  const sim::SimNoise nominal;
+  EXPECT_DOUBLE_EQ(n.wheel_radius_error_left, nominal.wheel_radius_error_left);
+  EXPECT_DOUBLE_EQ(n.wheel_radius_error_left, 0.0006);
+  EXPECT_DOUBLE_EQ(n.wheel_base_error, 0.0);
+  EXPECT_DOUBLE_EQ(n.slip_correlation_s, 0.0);
+  EXPECT_DOUBLE_EQ(n.wheel_radius_error_right, -0.004);
+  EXPECT_DOUBLE_EQ(n.ir_surface_bias_m, 0.02);
+  EXPECT_TRUE(SetNoiseNominal("", &n, &error));
+  EXPECT_DOUBLE_EQ(n.ir_surface_bias_m, 0.02);
+  EXPECT_FALSE(SetNoiseNominal("ir_surface_bias_m,wheel_bse_error", &n, &error));
+  EXPECT_NE(error.find("'wheel_bse_error'"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace irslam::metrics
