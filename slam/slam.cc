@@ -420,7 +420,7 @@ void Slam::Associate(const ExtractedLine& obs) {
     return;
   }
   double best_dr = 0;
-  const int best = NearestLine(rho_m, theta_m, &best_dr);
+  const int best = NearestLine(pose, obs, rho_m, theta_m, &best_dr);
   if (best < 0) {
     InsertLine(obs, -1);
     return;
@@ -432,17 +432,34 @@ void Slam::Associate(const ExtractedLine& obs) {
   UpdateMatched(obs, best, pose);
 }
 
-int Slam::NearestLine(double rho_m, double theta_m, double* best_dr) const {
+int Slam::NearestLine(const Pose2& pose, const ExtractedLine& obs, double rho_m, double theta_m,
+                      double* best_dr) const {
   // Eq. (13): the weighted Hough distance to every mapped line; keep the nearest.
+  // As the paper, in the map frame (default); there a heading error e moves the
+  // rho of a line seen at distance D from the map's origin by about D e (4
+  // degrees at 5 m: 0.35 m, far beyond epsilon_DH), so after a stretch of slip
+  // the wall being followed becomes a new line instead of correcting the
+  // heading. associate_in_robot_frame takes it where the observation was made:
+  // between the line extracted in the robot frame and each mapped line as the
+  // robot would see it from its estimated pose (eq. (10)'s prediction), where the
+  // same error moves rho only by the lever from the robot to the line; parallel
+  // lines keep their separation in both (docs/error-budget.md).
   const auto& ao = options_.association;
   int best = -1;
   double best_dh = ao.max_dh;
   for (int i = 0; i < ekf_.num_lines(); ++i) {
-    double dr = rho_m - ekf_.rho(i);
-    double dt = NormalizeAngle(theta_m - ekf_.theta(i));
-    if (std::abs(dt) > M_PI / 2) {  // the same line seen with the opposite normal (rho ~ 0)
-      dr = -rho_m - ekf_.rho(i);
-      dt = NormalizeAngle(dt + M_PI);
+    double dr, dt;
+    if (ao.associate_in_robot_frame) {
+      const LineObservation z = PredictObservation(pose, ekf_.rho(i), ekf_.theta(i), nullptr);
+      dr = obs.rho - z.rho;
+      dt = NormalizeAngle(obs.theta - z.theta);
+    } else {
+      dr = rho_m - ekf_.rho(i);
+      dt = NormalizeAngle(theta_m - ekf_.theta(i));
+      if (std::abs(dt) > M_PI / 2) {  // the same line seen with the opposite normal (rho ~ 0)
+        dr = -rho_m - ekf_.rho(i);
+        dt = NormalizeAngle(dt + M_PI);
+      }
     }
     const double dh = ao.weight_rho * dr * dr + ao.weight_theta * dt * dt;
     if (dh < best_dh) {
@@ -637,6 +654,9 @@ options::Table<AssociationOptions> AssociationKeys() {
       {"weight_rho", &A::weight_rho, 0, 1, "", "DH weight of rho, eq. (13); weight_rho + weight_theta = 1"},
       {"weight_theta", &A::weight_theta, 0, 1, "", "DH weight of theta, eq. (13)"},
       {"max_dh", &A::max_dh, 0, 10, "", "epsilon_DH: the largest weighted Hough distance of a match"},
+      {"associate_in_robot_frame", &A::associate_in_robot_frame, 0, 0, "",
+       "true: eq. (13) between the observation and each line as seen from the robot (false: in the map frame, as "
+       "the paper; docs/error-budget.md)"},
       {"angle_tolerance_rad", &A::angle_tolerance_rad, 0, 0.78, "rad",
        "parallel/orthogonal to line 1 within this, else not mapped"},
       {"constraint_sigma_rad", &A::constraint_sigma_rad, 1e-9, 1, "rad", "pseudo-measurement noise, eqs. (11)-(12)"},

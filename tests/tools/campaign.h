@@ -28,6 +28,11 @@ struct RunScore {
   double max_edge_m = 0;         // largest box-edge error over complete pieces
   double final_position_m = 0, final_heading_rad = 0, rms_position_m = 0, max_position_m = 0;
   double odom_final_position_m = 0;
+  // The largest position error in the room's frame: the start pose corrected by
+  // the map's best alignment to the true walls (metrics::BestAlignment), so a
+  // map turned or shifted as a whole (heading drift before the first wall is
+  // seen, which no observation can undo) does not count, its distortion does.
+  double room_max_position_m = 0;
   int contacts_furniture = 0;    // contacts with walls or furniture
   int contacts_clutter = 0;      // contacts with legs and posts (<= 6 cm)
   // Odometry self-calibration: the estimated wheel radius ratio (right/left)
@@ -59,6 +64,7 @@ std::vector<RunScore> RunCampaign(sim::NoiseProfile profile, uint64_t first_seed
 struct Rates {
   int runs = 0;
   double done = 0, pieces_good = 0, pieces_complete = 0, pose_ok = 0, lost = 0;
+  double lost_in_room = 0;  // runs whose room_max_position_m exceeds 20 cm (no target: a diagnosis)
   double furniture_contacts_per_run = 0;
   double ratio_within = 0;  // runs whose ratio_error is within 0.1 %
 };

@@ -145,9 +145,9 @@ int RunCampaignReport(const robot::CoreOptions& options, const std::string& prof
     }
     by_profile.push_back(campaign::RunCampaign(*profile, first_seed, runs, options, jobs, noise_nominal));
     const campaign::Rates r = campaign::Summarise(by_profile.back());
-    std::fprintf(stderr, "irslam-report: %s: %d runs, done %.1f %%, pieces good %.1f %%, complete %.1f %%, pose ok %.1f %%, lost %.1f %%, contacts/run %.2f\n",
+    std::fprintf(stderr, "irslam-report: %s: %d runs, done %.1f %%, pieces good %.1f %%, complete %.1f %%, pose ok %.1f %%, lost %.1f %% (in the room's frame %.1f %%), contacts/run %.2f\n",
                  name.c_str(), r.runs, 100 * r.done, 100 * r.pieces_good, 100 * r.pieces_complete, 100 * r.pose_ok,
-                 100 * r.lost, r.furniture_contacts_per_run);
+                 100 * r.lost, 100 * r.lost_in_room, r.furniture_contacts_per_run);
   }
   const std::string command = "irslam-report --campaign " + std::to_string(runs) + " --profiles " + profiles +
                               " --first-seed " + std::to_string(first_seed) +
