@@ -123,14 +123,11 @@ RunScore RunAndScore(uint64_t seed, sim::NoiseProfile profile, const robot::Core
   s.final_heading_rad = errors.final_heading_rad;
   s.rms_position_m = errors.rms_position_m;
   s.max_position_m = errors.max_position_m;
-  {
-    const Pose2 room_start =
-        metrics::CorrectStart(world.start, metrics::BestAlignment(run.core->slam().lines(), world.start, world));
-    s.room_max_position_m =
-        metrics::ComparePoses(metrics::ToWorld(run.core->slam().trajectory(), room_start),
-                              FromJson(truth["trajectory"]))
-            .max_position_m;
-  }
+  s.room_max_position_m =
+      metrics::ComparePoses(metrics::ToWorld(run.core->slam().trajectory(),
+                                             metrics::RoomFrameStart(run.core->slam().lines(), world)),
+                            FromJson(truth["trajectory"]))
+          .max_position_m;
   s.odom_final_position_m = metrics::ComparePoses(FromJson(truth["odometry"]), FromJson(truth["trajectory"])).final_position_m;
   sim::World furniture = world;
   furniture.objects.erase(std::remove_if(furniture.objects.begin(), furniture.objects.end(), metrics::IsClutter),

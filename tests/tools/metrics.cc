@@ -132,6 +132,10 @@ Pose2 BestAlignment(const std::vector<slam::LineFeature>& lines, const Pose2& st
   return {wx > 0 ? -sx / wx : 0.0, wy > 0 ? -sy / wy : 0.0, rot};
 }
 
+Pose2 RoomFrameStart(const std::vector<slam::LineFeature>& lines, const sim::World& world) {
+  return CorrectStart(world.start, BestAlignment(lines, world.start, world));
+}
+
 Pose2 CorrectStart(const Pose2& start, const Pose2& c) {
   // Rotate about the start position, then shift.
   return {start.x + c.x, start.y + c.y, NormalizeAngle(start.theta + c.theta)};
@@ -166,7 +170,7 @@ ObjectScores ScoreObjects(const nlohmann::json& map, const slam::Slam& slam,
     pieces.push_back(b);
   }
   const sim::Box room = world.Bounds();
-  const Pose2 fixed = CorrectStart(world.start, BestAlignment(slam.lines(), world.start, world));
+  const Pose2 fixed = RoomFrameStart(slam.lines(), world);
   const double rot = slam.map_rotation();
   int found = 0, kind_ok = 0, complete = 0, extra = 0;
   int good = 0, good_complete = 0;

@@ -80,6 +80,10 @@ Pose2 BestAlignment(const std::vector<slam::LineFeature>& lines, const Pose2& st
                     const sim::World& world);
 // Applies a correction from BestAlignment to the start pose used for comparisons.
 Pose2 CorrectStart(const Pose2& start, const Pose2& correction);
+// The start pose in the room's frame: world.start corrected by the best
+// alignment of `lines` (CorrectStart of BestAlignment), so a map turned or
+// shifted as a whole is judged by its shape alone.
+Pose2 RoomFrameStart(const std::vector<slam::LineFeature>& lines, const sim::World& world);
 
 // Objects of a map (contracts §4) against the true furniture: touching boxes (and
 // boxes under 10 cm apart) form one compound piece; a piece touching a wall is wall-contact. A piece nearer a

@@ -109,8 +109,7 @@ Run RunOne(const sim::World& world, robot::CoreOptions o, uint64_t seed, double 
     r.wall_dist_max = std::max(r.wall_dist_max, l.distance_m);
     r.wall_angle_max = std::max(r.wall_angle_max, l.angle_rad);
   }
-  const Pose2 fixed =
-      metrics::CorrectStart(world.start, metrics::BestAlignment(run.core->slam().lines(), world.start, world));
+  const Pose2 fixed = metrics::RoomFrameStart(run.core->slam().lines(), world);
   int unmatched_aligned;
   for (const auto& l : metrics::CompareLines(run.core->slam().lines(), fixed, world, &unmatched_aligned)) {
     if (!l.wall) continue;
@@ -271,9 +270,9 @@ int main(int argc, char** argv) {
                  "ambiguous moment, in the first of --reloc-worlds, from --first-seed (docs/relocalization.md)");
   std::string noise_nominal;
   app.add_option("--noise-nominal", noise_nominal,
-                 "Campaign: set these world noise keys (comma-separated, contracts §1) back to their nominal "
-                 "values in every generated world: what one effect of the error envelope costs "
-                 "(docs/robustness.md)");
+                 "Campaign (explore or clean): set these world noise keys (comma-separated, contracts §1) back "
+                 "to their nominal values in every generated world: what one effect of the error envelope costs "
+                 "(docs/error-budget.md)");
   CLI11_PARSE(app, argc, argv);
   {
     sim::SimNoise check;
