@@ -37,7 +37,7 @@ json SlamStatsJson(const slam::SlamStats& st) {
           {"updates", st.updates},           {"insertions", st.insertions},
           {"rejected_angle", st.rejected_angle}, {"merges", st.merges},
           {"loop_closures", st.loop_closures}, {"rejected_gate", st.rejected_gate},
-          {"gate_recoveries", st.gate_recoveries}};
+          {"gate_recoveries", st.gate_recoveries}, {"fallback_matches", st.fallback_matches}};
 }
 
 json SafetyJson(const robot::SafetyStatus& s) {

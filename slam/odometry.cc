@@ -76,6 +76,9 @@ options::Table<MotionNoise> MotionNoiseKeys() {
       {"var_per_m", &N::var_per_m, 0, 1, "m^2/m", "odometry position variance per metre travelled"},
       {"var_theta_per_rad", &N::var_theta_per_rad, 0, 1, "rad^2/rad", "heading variance per radian turned"},
       {"var_theta_per_m", &N::var_theta_per_m, 0, 1, "rad^2/m", "heading variance per metre travelled"},
+      {"adapt_window", &N::adapt_window, 0, 1000, "",
+       "> 0: the variances above scaled by the mean NIS / 2 of this many recent matches (0: fixed)"},
+      {"adapt_max_scale", &N::adapt_max_scale, 1, 1e4, "", "... clamped to 1 .. this"},
   };
   return kKeys;
 }

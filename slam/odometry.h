@@ -25,6 +25,14 @@ struct MotionNoise {
   double var_per_m = 4e-4;          // m^2 of position variance per metre travelled
   double var_theta_per_rad = 1e-3;  // rad^2 of heading variance per radian turned
   double var_theta_per_m = 2e-4;    // rad^2 of heading variance per metre travelled
+  // > 0: the three variances are multiplied by the running mean, over this many
+  // matches, of the matches' normalised innovation squared over its 2 degrees
+  // of freedom, clamped to 1 .. adapt_max_scale (covariance matching: A. H.
+  // Mohamed, K. P. Schwarz, "Adaptive Kalman filtering for INS/GPS", Journal of
+  // Geodesy 73, 1999): a robot that slips more than the noise above says gets
+  // the noise it shows, a nominal one keeps it. 0 (default): fixed.
+  int adapt_window = 0;
+  double adapt_max_scale = 16;
 };
 
 // A pose increment in the robot frame at the start of the increment.

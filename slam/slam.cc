@@ -206,7 +206,11 @@ void Slam::AddWheelTicks(const WheelTicks& ticks) {
     trajectory_.push_back({ticks.t, ekf_.pose()});
     return;
   }
-  ekf_.Predict(*m, options_.geometry.wheel_base_m, options_.motion_noise,
+  MotionNoise noise = options_.motion_noise;
+  noise.var_per_m *= noise_scale_;
+  noise.var_theta_per_rad *= noise_scale_;
+  noise.var_theta_per_m *= noise_scale_;
+  ekf_.Predict(*m, options_.geometry.wheel_base_m, noise,
                options_.calibration.random_walk_per_m, options_.calibration.min_sigma);
   if (trajectory_.empty() || ticks.t - trajectory_.back().t >= options_.trajectory_period_s) {
     trajectory_.push_back({ticks.t, ekf_.pose()});
@@ -414,22 +418,33 @@ void Slam::Associate(const ExtractedLine& obs) {
     InsertLine(obs, -1);
     return;
   }
-  // Only lines parallel or orthogonal to the first wall are mapped.
-  if (std::abs(AngleModHalfPi(theta_m - ekf_.theta(0))) > options_.association.angle_tolerance_rad) {
+  // Only lines parallel or orthogonal to the first wall are mapped; with the
+  // Mahalanobis fallback the test is for lines that match nothing.
+  const auto& ao = options_.association;
+  const bool square = std::abs(AngleModHalfPi(theta_m - ekf_.theta(0))) <= ao.angle_tolerance_rad;
+  if (!square && ao.fallback_mahalanobis2 <= 0) {
     ++stats_.rejected_angle;
     return;
   }
   double best_dr = 0;
-  const int best = NearestLine(pose, obs, rho_m, theta_m, &best_dr);
+  int best = NearestLine(pose, obs, rho_m, theta_m, &best_dr);
+  if (best < 0 && ao.fallback_mahalanobis2 > 0) {
+    best = NearestByMahalanobis(pose, obs, a, b);
+    if (best >= 0) ++stats_.fallback_matches;
+  }
+  if (best >= 0 && Overlap(best, a, b) > 0) {
+    UpdateMatched(obs, best, pose);
+    return;
+  }
+  if (!square) {
+    ++stats_.rejected_angle;
+    return;
+  }
   if (best < 0) {
     InsertLine(obs, -1);
     return;
   }
-  if (Overlap(best, a, b) <= 0) {
-    InsertCollinearPiece(obs, best, best_dr);
-    return;
-  }
-  UpdateMatched(obs, best, pose);
+  InsertCollinearPiece(obs, best, best_dr);
 }
 
 int Slam::NearestLine(const Pose2& pose, const ExtractedLine& obs, double rho_m, double theta_m,
@@ -465,6 +480,24 @@ int Slam::NearestLine(const Pose2& pose, const ExtractedLine& obs, double rho_m,
     if (dh < best_dh) {
       best_dh = dh;
       *best_dr = dr;
+      best = i;
+    }
+  }
+  return best;
+}
+
+int Slam::NearestByMahalanobis(const Pose2& pose, const ExtractedLine& obs, const Eigen::Vector2d& a,
+                               const Eigen::Vector2d& b) const {
+  int best = -1;
+  double best_d2 = options_.association.fallback_mahalanobis2;
+  for (int i = 0; i < ekf_.num_lines(); ++i) {
+    if (Overlap(i, a, b) <= 0) continue;
+    std::vector<Eigen::RowVectorXd> rows;
+    std::vector<double> y;
+    MatchRows(pose, i, obs, &rows, &y);
+    const double d2 = MatchNis(rows, y, obs);
+    if (d2 <= best_d2) {
+      best_d2 = d2;
       best = i;
     }
   }
@@ -507,18 +540,37 @@ void Slam::MatchRows(const Pose2& pose, int best, const ExtractedLine& obs, std:
   y->push_back(NormalizeAngle(obs.theta - zhat.theta));
 }
 
+double Slam::MatchNis(const std::vector<Eigen::RowVectorXd>& rows, const std::vector<double>& y,
+                      const ExtractedLine& obs) const {
+  Eigen::MatrixXd hm(2, ekf_.x().size());
+  hm.row(0) = rows[0];
+  hm.row(1) = rows[1];
+  // H P H' from H's non-zero columns (not a pass over the whole of P).
+  const Eigen::Matrix2d s = ekf_.ProjectedCov(hm) + obs.cov * options_.association.measurement_cov_scale;
+  const Eigen::Vector2d yy(y[0], y[1]);
+  return yy.dot(s.inverse() * yy);
+}
+
+void Slam::AdaptMotionNoise(double nis) {
+  // Covariance matching (odometry.h, MotionNoise::adapt_window): E[NIS] = 2 when
+  // the filter's noise is right. One wild match moves the mean by a bounded step.
+  const MotionNoise& n = options_.motion_noise;
+  if (n.adapt_window <= 0) return;
+  recent_nis_.push_back(std::min(nis, 2 * n.adapt_max_scale));
+  while (recent_nis_.size() > static_cast<size_t>(n.adapt_window)) recent_nis_.pop_front();
+  double sum = 0;
+  for (double v : recent_nis_) sum += v;
+  const double mean = sum / static_cast<double>(recent_nis_.size());
+  noise_scale_ = std::clamp(mean / 2, 1.0, n.adapt_max_scale);
+}
+
 bool Slam::PassesGate(const std::vector<Eigen::RowVectorXd>& rows, const std::vector<double>& y,
                       const ExtractedLine& obs, double* r_scale) {
   // Innovation gate: a DH match that the covariance cannot explain is not used
   // (a wrong association would pull the whole map).
   const auto& ao = options_.association;
-  Eigen::MatrixXd hm(2, ekf_.x().size());
-  hm.row(0) = rows[0];
-  hm.row(1) = rows[1];
-  // H P H' from H's non-zero columns (not a pass over the whole of P).
-  const Eigen::Matrix2d s = ekf_.ProjectedCov(hm) + obs.cov * ao.measurement_cov_scale;
-  const Eigen::Vector2d yy(y[0], y[1]);
-  const double d2 = yy.dot(s.inverse() * yy);
+  const double d2 = MatchNis(rows, y, obs);
+  AdaptMotionNoise(d2);
   if (d2 <= ao.max_mahalanobis2) {
     gate_rejections_in_a_row_ = 0;
     return true;
@@ -659,6 +711,9 @@ options::Table<AssociationOptions> AssociationKeys() {
        "the paper; docs/error-budget.md)"},
       {"angle_tolerance_rad", &A::angle_tolerance_rad, 0, 0.78, "rad",
        "parallel/orthogonal to line 1 within this, else not mapped"},
+      {"fallback_mahalanobis2", &A::fallback_mahalanobis2, 0, 1e3, "",
+       "> 0: a line eq. (13) matches to nothing is matched to the overlapped line of the smallest innovation d^2 "
+       "within this; the angle test then only for lines matching nothing (0: eq. (13) alone)"},
       {"constraint_sigma_rad", &A::constraint_sigma_rad, 1e-9, 1, "rad", "pseudo-measurement noise, eqs. (11)-(12)"},
       {"collinear_sigma_m", &A::collinear_sigma_m, 1e-9, 1, "m", "collinear pseudo-measurement noise, eq. (12)"},
       {"collinear_max_m", &A::collinear_max_m, 0, 1, "m",

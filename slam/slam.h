@@ -54,6 +54,14 @@ struct AssociationOptions {
   // generated nominal rooms, worse on two paper worlds; off until that is solved.
   bool associate_in_robot_frame = false;
   double angle_tolerance_rad = 0.14;  // epsilon_theta: parallel/orthogonal to line 1
+  // > 0: when eq. (13) matches nothing, the mapped line the observation overlaps
+  // with the smallest innovation Mahalanobis distance (with the prediction's
+  // covariance; nearest neighbour within the gate, Bar-Shalom & Fortmann,
+  // "Tracking and Data Association", 1988) is matched if its d^2 is within this
+  // (chi^2, 2 dof; 5.99: 95 %), so what is matched widens with the pose's
+  // uncertainty; and the first-wall angle test applies only to lines that match
+  // nothing. 0 (default): eq. (13) alone, as the paper.
+  double fallback_mahalanobis2 = 0;
   double constraint_sigma_rad = 1e-3; // pseudo-measurement noise, eqs. (11)-(12)
   double collinear_sigma_m = 1e-3;
   double collinear_max_m = 0.04;        // a collinear piece is tied (eq. 12) only within this offset
@@ -139,6 +147,7 @@ struct SlamStats {
   int rejected_angle = 0;   // neither parallel nor orthogonal to line 1
   int rejected_gate = 0;    // matched by DH but inconsistent with the covariance
   int gate_recoveries = 0;  // rejected matches used anyway, noise inflated (gate_recovery_after)
+  int fallback_matches = 0; // matched by the Mahalanobis fallback (fallback_mahalanobis2)
   int merges = 0;
   int loop_closures = 0;    // merges into the first line
   // Merges of a line mapped since AdoptMap into a line of the adopted saved
@@ -180,6 +189,9 @@ class Slam {
   double distance_m() const { return odometry_.distance_m(); }
   double time() const { return odometry_.last_t(); }
   const SlamStats& stats() const { return stats_; }
+  // The factor the motion noise is multiplied by now (MotionNoise::adapt_window;
+  // 1 when not adapted).
+  double motion_noise_scale() const { return noise_scale_; }
   // The odometry's estimated systematic parameters and their sigmas.
   CalibrationEstimate calibration() const;
   // The lines extracted from the last closed PDS window (robot frame), e.g. for
@@ -222,6 +234,14 @@ class Slam {
   // recovery).
   int NearestLine(const Pose2& pose, const ExtractedLine& obs, double rho_m, double theta_m,
                   double* best_dr) const;
+  // fallback_mahalanobis2: the overlapped line of the smallest innovation d^2 within it (-1: none).
+  int NearestByMahalanobis(const Pose2& pose, const ExtractedLine& obs, const Eigen::Vector2d& a,
+                           const Eigen::Vector2d& b) const;
+  // The normalised innovation squared of a match (2 dof) and its covariance.
+  double MatchNis(const std::vector<Eigen::RowVectorXd>& rows, const std::vector<double>& y,
+                  const ExtractedLine& obs) const;
+  // MotionNoise::adapt_window: one more match's NIS into the running mean.
+  void AdaptMotionNoise(double nis);
   void InsertCollinearPiece(const ExtractedLine& obs, int best, double best_dr);
   void UpdateMatched(const ExtractedLine& obs, int best, const Pose2& pose);
   void MatchRows(const Pose2& pose, int best, const ExtractedLine& obs, std::vector<Eigen::RowVectorXd>* rows,
@@ -247,6 +267,8 @@ class Slam {
   std::vector<ExtractedLine> last_window_lines_;
   int next_id_ = 1;
   int gate_rejections_in_a_row_ = 0;
+  std::deque<double> recent_nis_;  // MotionNoise::adapt_window
+  double noise_scale_ = 1;
   bool saved_frame_ = false;  // AdoptMap: the internal frame is a saved map's
   int first_new_id_ = 0;      // AdoptMap: lines with a smaller id were adopted
 

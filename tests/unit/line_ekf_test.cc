@@ -471,6 +471,74 @@ TEST(SlamMapTest, APieceOfASavedWallMergedIntoAnotherStaysOneOfItsIds) {
   EXPECT_TRUE(SymmetricPositiveDefinite(slam.ekf().P()));
 }
 
+TEST(SlamMapTest, MahalanobisFallbackMatchesAWallTheHeadingErrorTookBeyondEq13) {
+  // Continuing in a saved map with the heading uncertain (sigma 0.1 rad), the
+  // robot sees the wall y = -0.4 turned by 0.2 rad: beyond eq. (13)'s epsilon_DH
+  // (0.5 * 0.2^2 = 0.02 > 0.006) and beyond the first-wall angle test (0.14), so
+  // the paper's association drops it. The innovation's Mahalanobis distance
+  // (0.2^2 / (0.1^2 + 1e-3) = 3.6) is within 5.99: the fallback matches it and
+  // the heading is corrected to nearly the 0.2 rad the observation says.
+  auto run = [](double fallback) {
+    SlamOptions o = TestOptions();
+    o.resume.pose_sigma_rad = 0.1;
+    o.association.fallback_mahalanobis2 = fallback;
+    Slam slam(o);
+    slam.AdoptMap({0, 0, 0}, {testing::Line(1, -2.0, -0.4, 2.0, -0.4), testing::Line(2, 2.0, -0.4, 2.0, 2.0)});
+    slam.ProcessLines({Obs(0.4, -M_PI / 2 - 0.2, -0.5, 0.5)});
+    return slam;
+  };
+  const Slam paper = run(0);
+  EXPECT_EQ(paper.stats().rejected_angle, 1);
+  EXPECT_EQ(paper.stats().updates, 0);
+  EXPECT_NEAR(paper.pose().theta, 0, 1e-12);
+  const Slam widened = run(5.99);
+  EXPECT_EQ(widened.stats().fallback_matches, 1);
+  EXPECT_EQ(widened.stats().updates, 1);
+  EXPECT_EQ(widened.stats().rejected_angle, 0);
+  EXPECT_EQ(widened.num_lines(), 2u);
+  EXPECT_NEAR(widened.pose().theta, 0.2 * 0.01 / 0.011, 0.01);
+  // Beyond the fallback's d^2 (0.45 rad: 18) it is still not matched, and still
+  // refused as not square with the first wall.
+  SlamOptions o = TestOptions();
+  o.resume.pose_sigma_rad = 0.1;
+  o.association.fallback_mahalanobis2 = 5.99;
+  Slam far(o);
+  far.AdoptMap({0, 0, 0}, {testing::Line(1, -2.0, -0.4, 2.0, -0.4), testing::Line(2, 2.0, -0.4, 2.0, 2.0)});
+  far.ProcessLines({Obs(0.4, -M_PI / 2 - 0.45, -0.5, 0.5)});
+  EXPECT_EQ(far.stats().fallback_matches, 0);
+  EXPECT_EQ(far.stats().rejected_angle, 1);
+}
+
+TEST(SlamMapTest, AdaptedMotionNoiseFollowsTheInnovationsItIsShown) {
+  // Covariance matching (MotionNoise::adapt_window): observations of a saved
+  // wall scattered +-3 cm around it with a claimed sigma of 1 cm give a mean NIS
+  // near 9 (scale ~4.5); scattered +-5 mm they give ~0.25 and the scale stays 1.
+  auto scale_after = [](double scatter_m) {
+    SlamOptions o = TestOptions();
+    o.motion_noise.adapt_window = 10;
+    o.motion_noise.adapt_max_scale = 16;
+    o.resume.pose_sigma_m = 0.001;
+    o.resume.pose_sigma_rad = 0.001;
+    o.resume.line_sigma_rho_m = 0.001;
+    Slam slam(o);
+    slam.AdoptMap({0, 0, 0}, {testing::Line(1, -2.0, -0.4, 2.0, -0.4)});
+    for (int k = 0; k < 10; ++k) {
+      slam.ProcessLines({Obs(0.4 + (k % 2 ? scatter_m : -scatter_m), -M_PI / 2, -0.5, 0.5)});
+    }
+    EXPECT_EQ(slam.stats().updates, 10);
+    return slam.motion_noise_scale();
+  };
+  const double scattered = scale_after(0.03);
+  EXPECT_GT(scattered, 3.0);
+  EXPECT_LT(scattered, 6.0);
+  EXPECT_DOUBLE_EQ(scale_after(0.005), 1.0);
+  // Off (the default): fixed.
+  Slam fixed(TestOptions());
+  fixed.AdoptMap({0, 0, 0}, {testing::Line(1, -2.0, -0.4, 2.0, -0.4)});
+  for (int k = 0; k < 10; ++k) fixed.ProcessLines({Obs(k % 2 ? 0.43 : 0.37, -M_PI / 2, -0.5, 0.5)});
+  EXPECT_DOUBLE_EQ(fixed.motion_noise_scale(), 1.0);
+}
+
 TEST(SlamMapTest, MapFrameHasTheFirstWallAlongX) {
   Slam slam(TestOptions());
   slam.ProcessLines({Obs(0.4, -0.3, -0.5, 0.5)});
