@@ -428,11 +428,13 @@ void Slam::Associate(const ExtractedLine& obs) {
   }
   double best_dr = 0;
   int best = NearestLine(pose, obs, rho_m, theta_m, &best_dr);
+  bool fallback = false;
   if (best < 0 && ao.fallback_mahalanobis2 > 0) {
     best = NearestByMahalanobis(pose, obs, a, b);
-    if (best >= 0) ++stats_.fallback_matches;
+    fallback = best >= 0;
+    if (fallback) ++stats_.fallback_matches;
   }
-  if (best >= 0 && Overlap(best, a, b) > 0) {
+  if (best >= 0 && (fallback || Overlap(best, a, b) > -ao.continuation_gap_m)) {
     UpdateMatched(obs, best, pose);
     return;
   }
@@ -491,10 +493,12 @@ int Slam::NearestByMahalanobis(const Pose2& pose, const ExtractedLine& obs, cons
   int best = -1;
   double best_d2 = options_.association.fallback_mahalanobis2;
   for (int i = 0; i < ekf_.num_lines(); ++i) {
-    if (Overlap(i, a, b) <= 0) continue;
+    if (Overlap(i, a, b) < -options_.association.fallback_max_gap_m) continue;
     std::vector<Eigen::RowVectorXd> rows;
     std::vector<double> y;
     MatchRows(pose, i, obs, &rows, &y);
+    // y[0]: the offset as the robot sees it; the heading's error does not move it.
+    if (std::abs(y[0]) > options_.association.fallback_max_offset_m) continue;
     const double d2 = MatchNis(rows, y, obs);
     if (d2 <= best_d2) {
       best_d2 = d2;
@@ -711,9 +715,16 @@ options::Table<AssociationOptions> AssociationKeys() {
        "the paper; docs/error-budget.md)"},
       {"angle_tolerance_rad", &A::angle_tolerance_rad, 0, 0.78, "rad",
        "parallel/orthogonal to line 1 within this, else not mapped"},
+      {"continuation_gap_m", &A::continuation_gap_m, 0, 1, "m",
+       "a line matched by eq. (13) that continues the mapped one across at most this gap (no overlap) updates and "
+       "extends it (0: a collinear piece, eqs. (14)-(15), as the paper)"},
       {"fallback_mahalanobis2", &A::fallback_mahalanobis2, 0, 1e3, "",
        "> 0: a line eq. (13) matches to nothing is matched to the overlapped line of the smallest innovation d^2 "
        "within this; the angle test then only for lines matching nothing (0: eq. (13) alone)"},
+      {"fallback_max_gap_m", &A::fallback_max_gap_m, 0, 5, "m",
+       "... a line the observation overlaps or continues across a gap of at most this"},
+      {"fallback_max_offset_m", &A::fallback_max_offset_m, 0, 1, "m",
+       "... and lies within this of, as the robot sees it (a parallel face farther away is another line)"},
       {"constraint_sigma_rad", &A::constraint_sigma_rad, 1e-9, 1, "rad", "pseudo-measurement noise, eqs. (11)-(12)"},
       {"collinear_sigma_m", &A::collinear_sigma_m, 1e-9, 1, "m", "collinear pseudo-measurement noise, eq. (12)"},
       {"collinear_max_m", &A::collinear_max_m, 0, 1, "m",

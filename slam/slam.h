@@ -54,6 +54,13 @@ struct AssociationOptions {
   // generated nominal rooms, worse on two paper worlds; off until that is solved.
   bool associate_in_robot_frame = false;
   double angle_tolerance_rad = 0.14;  // epsilon_theta: parallel/orthogonal to line 1
+  // > 0: a line matched by eq. (13) that does not overlap the mapped line but
+  // continues it across a gap of at most this is the same wall seen further on
+  // (the next window of a wall being followed): it updates the line (eq. 10)
+  // and extends it, instead of becoming a collinear piece (eqs. 14-15) that,
+  // when declined (short partner), is a new line that never comes to overlap
+  // and never corrects the pose. 0 (default): the paper's overlap test (eq. 16).
+  double continuation_gap_m = 0;
   // > 0: when eq. (13) matches nothing, the mapped line the observation overlaps
   // with the smallest innovation Mahalanobis distance (with the prediction's
   // covariance; nearest neighbour within the gate, Bar-Shalom & Fortmann,
@@ -62,6 +69,11 @@ struct AssociationOptions {
   // uncertainty; and the first-wall angle test applies only to lines that match
   // nothing. 0 (default): eq. (13) alone, as the paper.
   double fallback_mahalanobis2 = 0;
+  double fallback_max_gap_m = 0.3;  // ... to a line it overlaps or continues across at most this gap
+  // ... and lies within this of as the robot sees it (its rho innovation): the
+  // heading's uncertainty widens the angle that matches, not the offset, so a
+  // face parallel to a wall a few cm in front of it is not taken for it.
+  double fallback_max_offset_m = 0.06;
   double constraint_sigma_rad = 1e-3; // pseudo-measurement noise, eqs. (11)-(12)
   double collinear_sigma_m = 1e-3;
   double collinear_max_m = 0.04;        // a collinear piece is tied (eq. 12) only within this offset

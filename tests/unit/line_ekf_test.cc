@@ -497,6 +497,25 @@ TEST(SlamMapTest, MahalanobisFallbackMatchesAWallTheHeadingErrorTookBeyondEq13) 
   EXPECT_EQ(widened.stats().rejected_angle, 0);
   EXPECT_EQ(widened.num_lines(), 2u);
   EXPECT_NEAR(widened.pose().theta, 0.2 * 0.01 / 0.011, 0.01);
+  // A face parallel to the wall 12 cm nearer is beyond eq. (13) (0.5 * 0.12^2)
+  // and, with the position uncertain (sigma 0.1 m), within the d^2; but the
+  // heading's uncertainty does not explain an offset: not matched.
+  {
+    SlamOptions po = TestOptions();
+    po.resume.pose_sigma_m = 0.1;
+    po.association.fallback_mahalanobis2 = 5.99;
+    Slam parallel(po);
+    parallel.AdoptMap({0, 0, 0}, {testing::Line(1, -2.0, -0.4, 2.0, -0.4), testing::Line(2, 2.0, -0.4, 2.0, 2.0)});
+    parallel.ProcessLines({Obs(0.28, -M_PI / 2, -0.5, 0.5)});
+    EXPECT_EQ(parallel.stats().fallback_matches, 0);
+    EXPECT_EQ(parallel.num_lines(), 3u);
+    // Without the offset bound the d^2 alone would take it for the wall.
+    po.association.fallback_max_offset_m = 1;
+    Slam loose(po);
+    loose.AdoptMap({0, 0, 0}, {testing::Line(1, -2.0, -0.4, 2.0, -0.4), testing::Line(2, 2.0, -0.4, 2.0, 2.0)});
+    loose.ProcessLines({Obs(0.28, -M_PI / 2, -0.5, 0.5)});
+    EXPECT_EQ(loose.stats().fallback_matches, 1);
+  }
   // Beyond the fallback's d^2 (0.45 rad: 18) it is still not matched, and still
   // refused as not square with the first wall.
   SlamOptions o = TestOptions();
@@ -507,6 +526,32 @@ TEST(SlamMapTest, MahalanobisFallbackMatchesAWallTheHeadingErrorTookBeyondEq13) 
   far.ProcessLines({Obs(0.4, -M_PI / 2 - 0.45, -0.5, 0.5)});
   EXPECT_EQ(far.stats().fallback_matches, 0);
   EXPECT_EQ(far.stats().rejected_angle, 1);
+}
+
+TEST(SlamMapTest, ContinuationGapJoinsTheNextPieceOfAFollowedWall) {
+  // A wall seen in two windows whose lines do not overlap (0.2 m between
+  // them, as when the IR's noise shortens the lines): by the paper, eq. (13)
+  // matches but eq. (16) finds no overlap, the 0.4 m partner is too short to
+  // tie to (collinear_min_length_m), and the piece becomes a second line. With
+  // continuation_gap_m it updates the wall and extends it over the gap.
+  auto run = [](double gap) {
+    SlamOptions o = TestOptions();
+    o.association.continuation_gap_m = gap;
+    Slam slam(o);
+    slam.ProcessLines({Obs(0.4, -M_PI / 2, -1.0, -0.6)});
+    slam.ProcessLines({Obs(0.41, -M_PI / 2, -0.4, 0.0)});
+    return slam;
+  };
+  const Slam paper = run(0);
+  EXPECT_EQ(paper.num_lines(), 2u);
+  EXPECT_EQ(paper.stats().updates, 0);
+  EXPECT_EQ(paper.stats().collinear_declined, 1);
+  const Slam joined = run(0.3);
+  ASSERT_EQ(joined.num_lines(), 1u);
+  EXPECT_EQ(joined.stats().updates, 1);
+  EXPECT_NEAR(joined.lines()[0].length(), 1.0, 0.02);
+  // A gap wider than the option stays two lines.
+  EXPECT_EQ(run(0.15).num_lines(), 2u);
 }
 
 TEST(SlamMapTest, AdaptedMotionNoiseFollowsTheInnovationsItIsShown) {
