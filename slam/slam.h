@@ -246,10 +246,13 @@ class Slam {
   // recovery).
   int NearestLine(const Pose2& pose, const ExtractedLine& obs, double rho_m, double theta_m,
                   double* best_dr) const;
-  // fallback_mahalanobis2: the overlapped line of the smallest innovation d^2 within it (-1: none).
+  // fallback_mahalanobis2: of the lines the observation overlaps or continues
+  // (fallback_max_gap_m) and lies within fallback_max_offset_m of, the one of the
+  // smallest innovation d^2 within it (-1: none).
   int NearestByMahalanobis(const Pose2& pose, const ExtractedLine& obs, const Eigen::Vector2d& a,
                            const Eigen::Vector2d& b) const;
-  // The normalised innovation squared of a match (2 dof) and its covariance.
+  // The normalised innovation squared (2 dof) of a match's rows and innovation
+  // (MatchRows), with the prediction's covariance H P H' + R.
   double MatchNis(const std::vector<Eigen::RowVectorXd>& rows, const std::vector<double>& y,
                   const ExtractedLine& obs) const;
   // MotionNoise::adapt_window: one more match's NIS into the running mean.
