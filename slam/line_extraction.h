@@ -36,7 +36,11 @@ struct ExtractionOptions {
   double weight_length = 0.487;     // wl  [m]
   double weight_rho = 1459;         // wrho [1/m^2]
   double weight_theta = 791;        // wtheta [1/rad^2]
-  double max_uncertainty = 4.5;     // lines with U above this are dropped
+  // Lines with U above this are dropped. 12, not the 4.5 first set on the Fig. 14
+  // room alone: over 200 generated rooms it finds furniture in 80.4 % of them
+  // (4.5: 70.8 %) and every paper world's objects as well or better
+  // (docs/error-budget.md, "the eq. (8) threshold").
+  double max_uncertainty = 12;
 };
 
 // Config section [slam.extraction].

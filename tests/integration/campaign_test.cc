@@ -67,10 +67,17 @@ INSTANTIATE_TEST_SUITE_P(Profiles, CampaignSubsetTest,
                          // and is now scored when its loop closes, earlier, with less to estimate from
                          // (over 100 worlds per profile with the calibration on, the ratio row went
                          // 24 -> 26 % realistic, 7 -> 8 % harsh: docs/robustness.md).
+                         // 2026-12-06, the eq. (8) threshold 4.5 -> 12 (slam.extraction.max_uncertainty):
+                         // nominal 12/12, 0.806, 5/12, 0/12; realistic 10/12, 0.226, 0/12, 10/12; harsh
+                         // 4/12, 0, 0, 12/12; ratio 12/12, 2/12, 3/12. A trade, measured over 100 worlds
+                         // per profile with the calibration on (docs/error-budget.md): pieces good 73.2 ->
+                         // 76.8 / 19.6 -> 35.3 / 3.6 -> 5.8 %, lost 8 -> 15 / 97 -> 86 / 99 -> 99 %, pose ok
+                         // 42 -> 35 / 5 -> 7 / 0 -> 1 %, done 95 -> 98 / 82 -> 84 / 56 -> 45 %; with the
+                         // calibration off (the shipped options, 200 worlds) nominal pose ok 53.5 % both.
                          // Raise these as the robustness work lands.
-                         ::testing::Values(Floor{sim::NoiseProfile::kNominal, 12 / 12.0, 0.74, 7 / 12.0, 1 / 12.0, 12 / 12.0},
-                                           Floor{sim::NoiseProfile::kRealistic, 9 / 12.0, 0.12, 1 / 12.0, 1.0, 3 / 12.0},
-                                           Floor{sim::NoiseProfile::kHarsh, 7 / 12.0, 0.0, 0.0, 1.0, 1 / 12.0}),
+                         ::testing::Values(Floor{sim::NoiseProfile::kNominal, 12 / 12.0, 0.80, 5 / 12.0, 1 / 12.0, 12 / 12.0},
+                                           Floor{sim::NoiseProfile::kRealistic, 9 / 12.0, 0.22, 0.0, 1.0, 2 / 12.0},
+                                           Floor{sim::NoiseProfile::kHarsh, 4 / 12.0, 0.0, 0.0, 1.0, 1 / 12.0}),
                          [](const ::testing::TestParamInfo<Floor>& p) { return std::string(sim::ToString(p.param.profile)); });
 
 // slam.association.associate_in_robot_frame (docs/error-budget.md): generated
@@ -91,6 +98,10 @@ TEST(AssociationFrameTest, TheFollowedWallKeepsMatchingInTheRobotFrameAfterSlip)
   const auto stats = [&](bool robot_frame) {
     robot::CoreOptions options = robot::DefaultCoreOptions();
     options.slam.association.associate_in_robot_frame = robot_frame;
+    // The eq. (8) threshold it was traced with (before 2026-12-06): with today's
+    // 12 the map-frame run inserts fewer pieces in these 80 s (16 insertions,
+    // 20 updates) and the defect shows later.
+    options.slam.extraction.max_uncertainty = 4.5;
     const sim::InProcessRun run = sim::RunInProcess(world, options, 11, 80.0);
     return run.core->slam().stats();
   };
@@ -105,9 +116,12 @@ TEST(AssociationFrameTest, TheFollowedWallKeepsMatchingInTheRobotFrameAfterSlip)
 // The room's-frame error (docs/error-budget.md) tells a map turned as a whole
 // from one bent inside: nominal room 132 is "lost" by 26 cm in the world frame
 // but within 5 cm once its map is aligned to the true walls; room 49's map is
-// wrong inside (about 1.9 m either way).
+// wrong inside (about 1.9 m either way). With the eq. (8) threshold these runs
+// were found with (before 2026-12-06): with today's 12, room 49's map is no
+// longer bent (21 cm in either frame) and 132's is turned less cleanly.
 TEST(RoomFrameErrorTest, AMapTurnedAsAWholeIsNotLostInTheRoomsFrameABentOneIs) {
-  const robot::CoreOptions options = robot::DefaultCoreOptions();
+  robot::CoreOptions options = robot::DefaultCoreOptions();
+  options.slam.extraction.max_uncertainty = 4.5;
   const RunScore turned = RunAndScore(132, sim::NoiseProfile::kNominal, options, options.mission.max_time_s);
   EXPECT_GT(turned.max_position_m, 0.20);
   EXPECT_LT(turned.room_max_position_m, 0.08);
