@@ -21,7 +21,6 @@ namespace {
 
 constexpr double kSampleStepM = 0.1;  // local lines are checked against free space at this step
 constexpr double kEndSlackM = 0.1;    // saved end points are this uncertain (overlap, crossing)
-constexpr double kSideRangeM = 2.0;   // trajectory points farther from a line do not tell its side
 constexpr double kPathStepM = 0.1;    // local trajectory decimation ...
 constexpr size_t kMaxPathPoints = 200;  // ... and its bound
 
@@ -100,7 +99,7 @@ using internal::SavedMap;
 
 // The side of segment a-b (towards its unit normal n: +1) the trajectory
 // points near it passed on (nearer points weigh more); 0 when none passed it.
-int TrajectorySide(const Vec2& a, const Vec2& b, const Vec2& n, const std::vector<Vec2>& path) {
+int TrajectorySide(const Vec2& a, const Vec2& b, const Vec2& n, const std::vector<Vec2>& path, double range_m) {
   const double length = (b - a).norm();
   if (length <= 0) return 0;
   const Vec2 d = (b - a) / length;
@@ -109,7 +108,7 @@ int TrajectorySide(const Vec2& a, const Vec2& b, const Vec2& n, const std::vecto
     const double along = d.dot(p - a);
     if (along < -0.2 || along > length + 0.2) continue;
     const double off = n.dot(p - a);
-    if (std::abs(off) > kSideRangeM) continue;
+    if (std::abs(off) > range_m) continue;
     vote += Sign(off) / (0.05 + std::abs(off));
   }
   return Sign(vote);
@@ -142,7 +141,7 @@ SavedMap PrepareSaved(const RelocalizeOptions& options, const std::vector<LineFe
     s.offset = (a[k] + b[k]) / 2;
     s.lo = std::min(a[s.dir], b[s.dir]);
     s.hi = std::max(a[s.dir], b[s.dir]);
-    s.side = TrajectorySide(a, b, s.dir == 0 ? Vec2(0, 1) : Vec2(1, 0), path);
+    s.side = TrajectorySide(a, b, s.dir == 0 ? Vec2(0, 1) : Vec2(1, 0), path, options.side_range_m);
     saved.segments.push_back(s);
   }
   return saved;
@@ -207,7 +206,7 @@ LocalEvidence PrepareLocal(const RelocalizeOptions& options, const std::vector<L
     const int dir = Direction(Transform(to_axis, line.a), Transform(to_axis, line.b),
                               options.angle_tolerance_rad);
     if (dir < 0 || line.length < options.min_line_m) continue;  // not Manhattan in its own frame
-    line.side = TrajectorySide(line.a, line.b, n, local.path);
+    line.side = TrajectorySide(line.a, line.b, n, local.path, options.side_range_m);
     local.evidence_m += line.length;
     local.by_direction_m[dir] += line.length;
     local.lines.push_back(line);
@@ -537,6 +536,8 @@ options::Table<RelocalizeOptions> RelocalizeKeys() {
       {"min_evidence_m", &R::min_evidence_m, 0, 1000, "m",
        "local line length needed before any commit"},
       {"min_line_m", &R::min_line_m, 0, 10, "m", "shorter local lines are not evidence"},
+      {"side_range_m", &R::side_range_m, 0.1, 10, "m",
+       "the side a line was seen from is voted by trajectory points at most this far from it"},
       {"line_tolerance_m", &R::line_tolerance_m, 0.005, 1, "m",
        "a local line lies on a saved one within this offset (also the vote cluster width)"},
       {"angle_tolerance_rad", &R::angle_tolerance_rad, 0.005, 0.78, "rad",

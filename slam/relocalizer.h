@@ -75,6 +75,15 @@ struct RelocalizeOptions {
   // (docs/relocalization.md, "Evidence before a commit").
   double min_evidence_m = 3.0;
   double min_line_m = 0.25;           // shorter local lines are not evidence
+  // The side a line was seen from (saved: from the saved trajectory; local:
+  // from the local one) is voted by the trajectory points beside it at most
+  // this far away. 1 m, not 2: the IR maps only up to 0.8 m, and points
+  // farther off are mostly the robot on the far side of the piece of
+  // furniture (or passing through the room's middle), which outvoted the
+  // contour along a face: two of fig19's box faces were saved with the wrong
+  // side, and a quarter turn then explained the evidence better than the
+  // truth (docs/relocalization.md, "The side a line was seen from").
+  double side_range_m = 1.0;
   double line_tolerance_m = 0.08;     // offset of a transformed local line from a saved one
   double angle_tolerance_rad = 0.12;  // direction of a local line from a map axis
   double commit_score = 0.75;         // best hypothesis explains at least this fraction ...

@@ -556,7 +556,7 @@ TEST(RelocalizerTest, NoEvidenceNoHypotheses) {
 
 TEST(RelocalizerTest, KeysHaveTheirDefaultsWithinBounds) {
   const RelocalizeOptions defaults;
-  EXPECT_EQ(RelocalizeKeys().size(), 18u);
+  EXPECT_EQ(RelocalizeKeys().size(), 19u);
   for (const auto& key : RelocalizeKeys()) {
     SCOPED_TRACE(std::string(key.name));
     EXPECT_FALSE(key.doc.empty());
