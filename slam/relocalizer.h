@@ -72,7 +72,9 @@ struct RelocalizeOptions {
   // room whose four boxes nearly map onto each other under a quarter turn) a
   // commit on 2-3 m of evidence, 5-9 s after the start, was 90 degrees off in
   // 3 of 200 starts; with 3 m none, and no other world changes
-  // (docs/relocalization.md, "Evidence before a commit").
+  // (docs/relocalization.md, "Evidence before a commit"). The cause was the
+  // wrong line sides side_range_m mends: with it 2 m commits those starts right
+  // too; 3 m is kept as a margin (at most 1 s of median time).
   double min_evidence_m = 3.0;
   double min_line_m = 0.25;           // shorter local lines are not evidence
   // The side a line was seen from (saved: from the saved trajectory; local:
