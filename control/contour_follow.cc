@@ -135,6 +135,11 @@ ContourFollow::Result ContourFollow::Step(double t, const slam::Slam& slam, cons
   // A wall-contact object has no way round: its free sides have been followed
   // once the robot has left it along the wall.
   if (at_wall_ && t - since_ > o.contour_leave_after_s && LeftTarget(modeler->model(), here)) {
+    // The side not mapped may be where the robot just went past (the model
+    // infers it from the trace, as from a contour all round).
+    if (modeler->CloseAlongWall(target_, trace_, slam.map_lines(), slam.map_trajectory())) {
+      return {Status::kClosed, {}};
+    }
     return {Status::kFreeSidesDone, {}};
   }
   if (t - since_ > o.contour_timeout_s) return {Status::kTimedOut, {}};

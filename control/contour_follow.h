@@ -56,7 +56,8 @@ class ContourFollow {
   enum class Status {
     kFollowing,
     kComplete,       // the model completed it from new lines
-    kClosed,         // all round it: the model closed the last side from the contour
+    kClosed,         // all round it, or along a wall-contact object's free sides: the model
+                     // closed the last side from the contour
     kIncomplete,     // all round it contour_loops times, still incomplete
     kFreeSidesDone,  // a wall-contact object's free sides followed, still incomplete
     kTimedOut,

@@ -43,6 +43,9 @@ options::Table<ModelOptions> ModelKeys() {
        "a side ending this close to a wall (along it) runs into it"},
       {"same_size_m", &O::same_size_m, 0, 2, "m",
        "a piece of furniture that moved since the saved map is recognised by its size within this"},
+      {"trace_band_m", &O::trace_band_m, 0.05, 3, "m",
+       "a wall-contact object's contour along the wall this close to the middle of an edge of its box, outside "
+       "it, went past that side (its last side is inferred)"},
   };
   return kKeys;
 }
@@ -63,6 +66,17 @@ bool Modeler::CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& 
   // Remembered either way: a third side found later still closes it.
   closed_by_contour_.push_back(object_id);
   if (loop.size() >= 3) contour_loops_.push_back(loop);
+  Update(lines, trajectory);
+  for (const auto& o : model_.objects) {
+    if (o.id == object_id) return o.complete;
+  }
+  return false;
+}
+
+bool Modeler::CloseAlongWall(int object_id, const std::vector<Eigen::Vector2d>& trace,
+                             const std::vector<slam::LineFeature>& lines,
+                             const std::vector<TimedPose>& trajectory) {
+  if (!trace.empty()) wall_traces_.push_back(trace);
   Update(lines, trajectory);
   for (const auto& o : model_.objects) {
     if (o.id == object_id) return o.complete;
@@ -95,6 +109,7 @@ void Modeler::Seed(const EnvironmentModel& saved, std::vector<TimedPose> saved_t
   given_up_.clear();
   closed_by_contour_.clear();
   contour_loops_.clear();
+  wall_traces_.clear();
   next_id_ = 1;
   for (const auto& o : saved.objects) {
     next_id_ = std::max(next_id_, o.id + 1);
@@ -289,6 +304,47 @@ ObjectModel BuildObject(const std::vector<Side>& sides, const std::vector<size_t
   return obj;
 }
 
+// The one edge of a wall-contact object's box (0 bottom, 1 right, 2 top, 3
+// left) that is neither against a wall nor a face seen from outside; -1 if
+// there is none or more than one.
+int MissingEdge(const std::vector<Side>& sides, const std::vector<size_t>& g, const Box& b,
+                const RoomModel& room, const ModelOptions& o) {
+  if (!room.box || b.width() < 2 * o.collinear_m || b.height() < 2 * o.collinear_m) return -1;
+  const Box& r = *room.box;
+  const double at[4] = {b.ymin, b.xmax, b.ymax, b.xmin};
+  const double wall[4] = {r.ymin, r.xmax, r.ymax, r.xmin};
+  int missing = -1;
+  for (int e = 0; e < 4; ++e) {
+    if (std::abs(at[e] - wall[e]) < o.wall_contact_m) continue;
+    const bool horizontal = e % 2 == 0;
+    const int outward = e == 0 || e == 3 ? -1 : 1;
+    const bool face = std::any_of(g.begin(), g.end(), [&](size_t i) {
+      const Side& s = sides[i];
+      return s.horizontal == horizontal && s.seen_from == outward && std::abs(s.c - at[e]) < o.collinear_m;
+    });
+    if (face) continue;
+    if (missing >= 0) return -1;
+    missing = e;
+  }
+  return missing;
+}
+
+// A trace went past edge e of box b outside it: a point beyond the edge within
+// band_m of its middle. (Not over the edge itself: beside a short side that
+// meets a wall the robot keeps its follow distance from the wall too, and
+// passes its corner rather than its middle.)
+bool TracePassesEdge(const std::vector<Eigen::Vector2d>& trace, const Box& b, int e, double band_m) {
+  const bool horizontal = e % 2 == 0;
+  const double at = e == 0 ? b.ymin : e == 1 ? b.xmax : e == 2 ? b.ymax : b.xmin;
+  const double outward = e == 0 || e == 3 ? -1 : 1;
+  const Eigen::Vector2d mid = horizontal ? Eigen::Vector2d(0.5 * (b.xmin + b.xmax), at)
+                                         : Eigen::Vector2d(at, 0.5 * (b.ymin + b.ymax));
+  return std::any_of(trace.begin(), trace.end(), [&](const Eigen::Vector2d& p) {
+    const double off = outward * ((horizontal ? p.y() : p.x()) - at);
+    return off > 0 && (p - mid).norm() < band_m;
+  });
+}
+
 }  // namespace
 
 void Modeler::NameNewObject(ObjectModel* obj) {
@@ -343,7 +399,8 @@ void Modeler::RenameNewAsMoved(ObjectModel* obj) {
   obj->note = notes_.back().second;
 }
 
-void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop) {
+void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop,
+                        const std::vector<bool>& group_inferred) {
   // Stable ids: an object keeps the id of the previous object it overlaps most.
   std::vector<bool> taken(model_.objects.size(), false);
   for (size_t gi = 0; gi < m->objects.size(); ++gi) {
@@ -380,6 +437,11 @@ void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_l
       // (After a note saying where it came from: "moved ..." stays first.)
       obj.note = obj.note.empty() ? "one side inferred from the contour" : obj.note + "; one side inferred from the contour";
     }
+    if (group_inferred[gi] && !obj.complete) {
+      obj.complete = true;
+      const char* why = "one side inferred from the contour along the wall";
+      obj.note = obj.note.empty() ? why : obj.note + "; " + why;
+    }
     for (const auto& [gid, why] : given_up_) {
       if (gid == obj.id && !obj.complete) {
         // (A contoured object that has since been closed is not given up.)
@@ -405,13 +467,21 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
   m.room = FindRoom(sides, options_.collinear_m, &is_wall);
   std::vector<bool> side_in_loop;
   const auto groups = GroupObjects(sides, is_wall, contour_loops_, options_, &side_in_loop);
-  std::vector<bool> group_in_loop;
+  std::vector<bool> group_in_loop, group_inferred;
   for (const auto& g : groups) {
     group_in_loop.push_back(
         std::any_of(g.begin(), g.end(), [&](size_t i) { return side_in_loop[i]; }));
     m.objects.push_back(BuildObject(sides, g, m.room, options_));
+    // Its free sides followed along the wall: the one side left is where the robot went past.
+    const ObjectModel& obj = m.objects.back();
+    const int e = obj.kind == ObjectKind::kWallContact && !obj.complete && obj.lines.size() >= 2
+                      ? MissingEdge(sides, g, obj.box, m.room, options_)
+                      : -1;
+    group_inferred.push_back(e >= 0 && std::any_of(wall_traces_.begin(), wall_traces_.end(), [&](const auto& tr) {
+                               return TracePassesEdge(tr, obj.box, e, options_.trace_band_m);
+                             }));
   }
-  AssignIds(&m, group_in_loop);
+  AssignIds(&m, group_in_loop, group_inferred);
   std::sort(m.objects.begin(), m.objects.end(),
             [](const auto& a, const auto& b) { return a.id < b.id; });
   model_ = std::move(m);

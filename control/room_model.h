@@ -23,9 +23,14 @@ struct ModelOptions {
   double collinear_m = 0.08;         // pieces of one wall/side: offsets within this
   double corner_m = 0.35;            // two sides meet: their corner within this of an end
                                      // (gaps narrower than the robot are not passable anyway)
-  double wall_contact_m = 0.15;      // an object this close to a wall touches it
+  double wall_contact_m = 0.30;      // an object this close to a wall touches it: the robot
+                                     // (0.34 m across) can neither pass the gap nor see the side
+                                     // facing the wall (0.15 until 2026-12-06: pieces 0.15-0.3 m
+                                     // off a wall waited for a side no pass could map)
   double wall_reach_m = 0.35;        // a side ending this close to a wall (along it) runs into it
   double same_size_m = 0.15;         // a moved piece is recognised by its size within this
+  double trace_band_m = 0.6;         // a contour along the wall this close to the middle of a
+                                     // box edge, outside it, went past that side
 };
 options::Table<ModelOptions> ModelKeys();  // [model]
 
@@ -79,6 +84,16 @@ class Modeler {
   bool CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& loop,
                       const std::vector<slam::LineFeature>& lines,
                       const std::vector<TimedPose>& trajectory);
+  // A wall-contact object's free sides have been followed, along `trace` (map
+  // frame: from the wall, round the object, back to the wall): if one edge of
+  // its box is neither a mapped face nor against a wall, and the trace went
+  // past it outside (within trace_band_m of its middle), that side is
+  // inferred and the object counts as complete (noted) - the wall-contact
+  // counterpart of CloseByContour. Any later Update applies it too. False if
+  // still incomplete.
+  bool CloseAlongWall(int object_id, const std::vector<Eigen::Vector2d>& trace,
+                      const std::vector<slam::LineFeature>& lines,
+                      const std::vector<TimedPose>& trajectory);
   // Starts from a saved model (issue 14: a mission continuing in a saved map):
   // its objects' ids are kept by the next Update (by their boxes, as ever),
   // complete objects stay complete (a side inferred from a contour is not
@@ -101,7 +116,8 @@ class Modeler {
  private:
   // Gives the new model's objects the ids of the old ones they overlap most (new
   // ids otherwise), and applies closed contours and given-up notes.
-  void AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop);
+  void AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop,
+                 const std::vector<bool>& group_inferred);
   void NameNewObject(ObjectModel* obj);
   // The piece NoteMoved was told of that has obj's size: obj takes its id
   // and a "moved" note (false: none).
@@ -115,6 +131,7 @@ class Modeler {
   std::vector<std::pair<int, std::string>> given_up_;
   std::vector<int> closed_by_contour_;
   std::vector<std::vector<Eigen::Vector2d>> contour_loops_;  // map frame
+  std::vector<std::vector<Eigen::Vector2d>> wall_traces_;    // CloseAlongWall's (map frame)
   std::vector<TimedPose> prior_trajectory_;  // Seed's (map frame)
   bool seeded_ = false;
   std::vector<int> saved_ids_;                     // Seed's objects

@@ -168,6 +168,84 @@ TEST(RoomModelTest, SidesInsideAFollowedContourAreOneObject) {
   EXPECT_NEAR(o.box.ymin, 2.2, 1e-9);
 }
 
+// A box against the bottom wall (x 1.5..2.3, y 0..0.6) whose right side was
+// never mapped (a short side turned round on an outer corner), and the robot's
+// way along its free sides: up beside the left side, over the top, down beside
+// the right side, then along the wall away (`leave_x`: +1 rightwards).
+struct AlongWall {
+  std::vector<slam::LineFeature> lines;
+  std::vector<TimedPose> trajectory;
+  std::vector<Eigen::Vector2d> trace;
+};
+AlongWall BoxOnTheBottomWall(double right_side_offset_m) {
+  AlongWall a;
+  a.lines = Room();
+  a.lines.push_back(Line(6, 1.5, 0.02, 1.5, 0.58));
+  a.lines.push_back(Line(7, 1.52, 0.6, 2.28, 0.6));
+  for (const auto& p : Loop()) {
+    if (p.pose.y > 0.5) a.trajectory.push_back(p);  // not the bottom run: it crosses the box
+  }
+  const double right = 2.3 + right_side_offset_m;
+  for (double y = 0.4; y <= 1.0; y += 0.1) a.trace.emplace_back(1.1, y);
+  for (double x = 1.1; x <= right; x += 0.1) a.trace.emplace_back(x, 1.0);
+  for (double y = 1.0; y >= 0.4; y -= 0.1) a.trace.emplace_back(right, y);
+  for (double x = right; x <= 3.6; x += 0.1) a.trace.emplace_back(x, 0.4);
+  for (const auto& p : a.trace) a.trajectory.push_back({0, {p.x(), p.y(), 0}});
+  return a;
+}
+
+TEST(RoomModelTest, AWallContactObjectsLastSideIsInferredWhereItsFreeSidesWereFollowedPast) {
+  const AlongWall a = BoxOnTheBottomWall(0.4);  // the follow distance
+  Modeler m{ModelOptions{}};
+  ASSERT_EQ(m.Update(a.lines, a.trajectory).objects.size(), 1u);
+  const ObjectModel& before = m.model().objects[0];
+  EXPECT_EQ(before.kind, ObjectKind::kWallContact);
+  EXPECT_FALSE(before.complete);  // two of its three free sides
+  const int id = before.id;
+  EXPECT_TRUE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
+  const ObjectModel& o = m.model().objects[0];
+  EXPECT_EQ(o.id, id);
+  EXPECT_TRUE(o.complete);
+  EXPECT_EQ(o.note, "one side inferred from the contour along the wall");
+  EXPECT_NEAR(o.box.xmax, 2.28, 1e-9);
+  EXPECT_NEAR(o.box.ymax, 0.6, 1e-9);
+  // Kept by later updates (a new line elsewhere).
+  auto more = a.lines;
+  more.push_back(Line(20, 3.0, 3.0, 3.5, 3.0));
+  EXPECT_TRUE(m.Update(more, a.trajectory).objects[0].complete);
+}
+
+TEST(RoomModelTest, NoSideIsInferredWhereTheRobotDidNotGoPast) {
+  // The robot went past 0.8 m off the right side: the side may be anywhere
+  // within, or the box have a step there.
+  {
+    const AlongWall a = BoxOnTheBottomWall(0.8);
+    Modeler m{ModelOptions{}};
+    const int id = m.Update(a.lines, a.trajectory).objects[0].id;
+    EXPECT_FALSE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
+  }
+  // It followed the left side only and left along the wall the other way.
+  {
+    AlongWall a = BoxOnTheBottomWall(0.4);
+    a.trace.clear();
+    for (double y = 1.0; y >= 0.4; y -= 0.1) a.trace.emplace_back(1.1, y);
+    for (double x = 1.1; x >= 0.4; x -= 0.1) a.trace.emplace_back(x, 0.4);
+    Modeler m{ModelOptions{}};
+    const int id = m.Update(a.lines, a.trajectory).objects[0].id;
+    EXPECT_FALSE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
+    EXPECT_FALSE(m.model().objects[0].complete);
+  }
+  // Two sides unmapped (only the top): nothing is inferred from one pass.
+  {
+    AlongWall a = BoxOnTheBottomWall(0.4);
+    a.lines.erase(std::remove_if(a.lines.begin(), a.lines.end(), [](const auto& l) { return l.id == 6; }),
+                  a.lines.end());
+    Modeler m{ModelOptions{}};
+    const int id = m.Update(a.lines, a.trajectory).objects[0].id;
+    EXPECT_FALSE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
+  }
+}
+
 // The one corner rule (corner_m 0.35: loose 0.525, tight 0.1).
 TEST(RoomModelTest, TheCornerRule) {
   using room_geometry::CornerEnd;
