@@ -43,6 +43,8 @@ options::Table<ModelOptions> ModelKeys() {
        "a side ending this close to a wall (along it) runs into it"},
       {"same_size_m", &O::same_size_m, 0, 2, "m",
        "a piece of furniture that moved since the saved map is recognised by its size within this"},
+      {"merge_touching_m", &O::merge_touching_m, 0, 1, "m",
+       "incomplete objects whose boxes are this close are pieces of one (0: off)"},
       {"trace_band_m", &O::trace_band_m, 0.05, 3, "m",
        "a wall-contact object's contour along the wall this close to the middle of an edge of its box, outside "
        "it, went past that side (its last side is inferred)"},
@@ -345,6 +347,39 @@ bool TracePassesEdge(const std::vector<Eigen::Vector2d>& trace, const Box& b, in
   });
 }
 
+// Incomplete objects whose boxes touch (within merge_touching_m) are pieces of
+// one: compound furniture whose step between its boxes was too short to map.
+// Groups with a side inside a followed contour are left as the contour joined them.
+std::vector<std::vector<size_t>> MergeTouching(const std::vector<Side>& sides, std::vector<std::vector<size_t>> groups,
+                                               const std::vector<bool>& side_in_loop, const RoomModel& room,
+                                               const ModelOptions& o) {
+  if (o.merge_touching_m <= 0) return groups;
+  const auto mergeable = [&](const std::vector<size_t>& g, const ObjectModel& obj) {
+    return !obj.complete && std::none_of(g.begin(), g.end(), [&](size_t i) { return side_in_loop[i]; });
+  };
+  for (bool merged = true; merged;) {
+    merged = false;
+    std::vector<ObjectModel> objs;
+    for (const auto& g : groups) objs.push_back(BuildObject(sides, g, room, o));
+    for (size_t i = 0; i < groups.size() && !merged; ++i) {
+      if (!mergeable(groups[i], objs[i])) continue;
+      for (size_t j = i + 1; j < groups.size() && !merged; ++j) {
+        if (!mergeable(groups[j], objs[j])) continue;
+        const Box& a = objs[i].box;
+        const Box& b = objs[j].box;
+        const double gx = std::max(a.xmin - b.xmax, b.xmin - a.xmax);
+        const double gy = std::max(a.ymin - b.ymax, b.ymin - a.ymax);
+        if (gx < o.merge_touching_m && gy < o.merge_touching_m) {
+          groups[i].insert(groups[i].end(), groups[j].begin(), groups[j].end());
+          groups.erase(groups.begin() + static_cast<std::ptrdiff_t>(j));
+          merged = true;
+        }
+      }
+    }
+  }
+  return groups;
+}
+
 }  // namespace
 
 void Modeler::NameNewObject(ObjectModel* obj) {
@@ -466,7 +501,8 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
   std::vector<bool> is_wall;
   m.room = FindRoom(sides, options_.collinear_m, &is_wall);
   std::vector<bool> side_in_loop;
-  const auto groups = GroupObjects(sides, is_wall, contour_loops_, options_, &side_in_loop);
+  const auto groups = MergeTouching(sides, GroupObjects(sides, is_wall, contour_loops_, options_, &side_in_loop),
+                                    side_in_loop, m.room, options_);
   std::vector<bool> group_in_loop, group_inferred;
   for (const auto& g : groups) {
     group_in_loop.push_back(

@@ -29,6 +29,9 @@ struct ModelOptions {
                                      // off a wall waited for a side no pass could map)
   double wall_reach_m = 0.35;        // a side ending this close to a wall (along it) runs into it
   double same_size_m = 0.15;         // a moved piece is recognised by its size within this
+  double merge_touching_m = 0.20;    // incomplete objects whose boxes are this close are pieces
+                                     // of one (compound furniture whose step was not mapped, a
+                                     // piece's sides that no corner joined; 0: off)
   double trace_band_m = 0.6;         // a contour along the wall this close to the middle of a
                                      // box edge, outside it, went past that side
 };

@@ -155,7 +155,11 @@ TEST(RoomModelTest, SidesInsideAFollowedContourAreOneObject) {
     loop.push_back(p);
     traj.push_back({0, {p.x(), p.y(), 0}});
   }
-  Modeler m{ModelOptions{}};
+  // (Their boxes touch, and model.merge_touching_m alone joins them too: off
+  // here, to test the contour.)
+  ModelOptions apart;
+  apart.merge_touching_m = 0;
+  Modeler m{apart};
   // Without the loop: two objects (the top of the first box meets nothing).
   EXPECT_EQ(m.Update(lines, traj).objects.size(), 2u);
   const int id = m.model().objects[0].id;
@@ -244,6 +248,37 @@ TEST(RoomModelTest, NoSideIsInferredWhereTheRobotDidNotGoPast) {
     const int id = m.Update(a.lines, a.trajectory).objects[0].id;
     EXPECT_FALSE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
   }
+}
+
+TEST(RoomModelTest, IncompleteObjectsWhoseBoxesTouchArePiecesOfOne) {
+  // Compound furniture: a box 1.5..2.0 x 1.5..2.0 seen from below and the left,
+  // and a lower one 2.0..2.6 x 1.5..1.8 beside it seen from the right and above;
+  // the step between them and the tall box's top were never mapped, and no
+  // corner joins the two pairs of sides.
+  auto lines = Room();
+  lines.push_back(Line(6, 1.5, 1.5, 2.0, 1.5));
+  lines.push_back(Line(7, 1.5, 2.0, 1.5, 1.5));
+  lines.push_back(Line(8, 2.6, 1.5, 2.6, 1.8));
+  lines.push_back(Line(9, 2.6, 1.8, 2.0, 1.8));
+  auto traj = Loop();
+  for (double x = 2.0; x <= 2.6; x += 0.1) traj.push_back({0, {x, 2.3, 0}});
+  ModelOptions apart;
+  apart.merge_touching_m = 0;
+  Modeler separate{apart};
+  EXPECT_EQ(separate.Update(lines, traj).objects.size(), 2u);
+  Modeler m{ModelOptions{}};
+  const auto& model = m.Update(lines, traj);
+  ASSERT_EQ(model.objects.size(), 1u);
+  EXPECT_EQ(model.objects[0].lines, std::vector<int>({6, 7, 8, 9}));
+  EXPECT_NEAR(model.objects[0].box.xmin, 1.5, 1e-9);
+  EXPECT_NEAR(model.objects[0].box.xmax, 2.6, 1e-9);
+  // 25 cm apart: two pieces.
+  lines.resize(lines.size() - 2);
+  lines.push_back(Line(8, 2.85, 1.5, 2.85, 1.8));
+  lines.push_back(Line(9, 2.85, 1.8, 2.25, 1.8));
+  for (double x = 2.25; x <= 2.85; x += 0.1) traj.push_back({0, {x, 2.3, 0}});
+  Modeler far{ModelOptions{}};
+  EXPECT_EQ(far.Update(lines, traj).objects.size(), 2u);
 }
 
 // The one corner rule (corner_m 0.35: loose 0.525, tight 0.1).
