@@ -92,6 +92,8 @@ void Modeler::NoteMoved(int id, const Box& was) {
   // judged on what is seen of it there.
   closed_by_contour_.erase(std::remove(closed_by_contour_.begin(), closed_by_contour_.end(), id),
                            closed_by_contour_.end());
+  closed_along_wall_.erase(std::remove(closed_along_wall_.begin(), closed_along_wall_.end(), id),
+                           closed_along_wall_.end());
   given_up_.erase(std::remove_if(given_up_.begin(), given_up_.end(), [&](const auto& g) { return g.first == id; }),
                   given_up_.end());
   model_.objects.erase(std::remove_if(model_.objects.begin(), model_.objects.end(),
@@ -110,12 +112,16 @@ void Modeler::Seed(const EnvironmentModel& saved, std::vector<TimedPose> saved_t
   prior_trajectory_ = std::move(saved_trajectory);
   given_up_.clear();
   closed_by_contour_.clear();
+  closed_along_wall_.clear();
   contour_loops_.clear();
   wall_traces_.clear();
   next_id_ = 1;
   for (const auto& o : saved.objects) {
     next_id_ = std::max(next_id_, o.id + 1);
+    // (Complete stays complete: a side inferred from a contour, all round or
+    // along the wall, is not inferred again without it.)
     if (o.complete) closed_by_contour_.push_back(o.id);
+    if (o.complete) closed_along_wall_.push_back(o.id);
     if (o.given_up) given_up_.emplace_back(o.id, o.note);
   }
 }
@@ -428,6 +434,7 @@ void Modeler::RenameNewAsMoved(ObjectModel* obj) {
   notes_.erase(std::remove_if(notes_.begin(), notes_.end(), [&](const auto& n) { return n.first == was; }),
                notes_.end());
   std::replace(closed_by_contour_.begin(), closed_by_contour_.end(), was, obj->id);
+  std::replace(closed_along_wall_.begin(), closed_along_wall_.end(), was, obj->id);
   for (auto& g : given_up_) {
     if (g.first == was) g.first = obj->id;
   }
@@ -472,8 +479,11 @@ void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_l
       // (After a note saying where it came from: "moved ..." stays first.)
       obj.note = obj.note.empty() ? "one side inferred from the contour" : obj.note + "; one side inferred from the contour";
     }
-    if (group_inferred[gi] && !obj.complete) {
+    const bool along = group_inferred[gi] || std::find(closed_along_wall_.begin(), closed_along_wall_.end(),
+                                                       obj.id) != closed_along_wall_.end();
+    if (along && !obj.complete && obj.lines.size() >= 2) {
       obj.complete = true;
+      if (group_inferred[gi]) closed_along_wall_.push_back(obj.id);
       const char* why = "one side inferred from the contour along the wall";
       obj.note = obj.note.empty() ? why : obj.note + "; " + why;
     }

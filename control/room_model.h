@@ -133,6 +133,7 @@ class Modeler {
   int next_id_ = 1;
   std::vector<std::pair<int, std::string>> given_up_;
   std::vector<int> closed_by_contour_;
+  std::vector<int> closed_along_wall_;  // ids CloseAlongWall's traces completed (or a saved map's complete)
   std::vector<std::vector<Eigen::Vector2d>> contour_loops_;  // map frame
   std::vector<std::vector<Eigen::Vector2d>> wall_traces_;    // CloseAlongWall's (map frame)
   std::vector<TimedPose> prior_trajectory_;  // Seed's (map frame)

@@ -239,15 +239,20 @@ TEST(RoomModelTest, NoSideIsInferredWhereTheRobotDidNotGoPast) {
     EXPECT_FALSE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
     EXPECT_FALSE(m.model().objects[0].complete);
   }
-  // Two sides unmapped (only the top): nothing is inferred from one pass.
-  {
-    AlongWall a = BoxOnTheBottomWall(0.4);
-    a.lines.erase(std::remove_if(a.lines.begin(), a.lines.end(), [](const auto& l) { return l.id == 6; }),
-                  a.lines.end());
-    Modeler m{ModelOptions{}};
-    const int id = m.Update(a.lines, a.trajectory).objects[0].id;
-    EXPECT_FALSE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
-  }
+}
+
+TEST(RoomModelTest, ASideInferredAlongTheWallStaysInferredInASavedMap) {
+  const AlongWall a = BoxOnTheBottomWall(0.4);
+  Modeler m{ModelOptions{}};
+  const int id = m.Update(a.lines, a.trajectory).objects[0].id;
+  ASSERT_TRUE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
+  // A mission continuing in the saved map (no trace of its own yet): still complete.
+  Modeler next{ModelOptions{}};
+  next.Seed(m.model(), a.trajectory);
+  const ObjectModel& again = next.Update(a.lines, {}).objects[0];
+  EXPECT_EQ(again.id, id);
+  EXPECT_TRUE(again.complete);
+  EXPECT_EQ(again.note, "one side inferred from the contour along the wall");
 }
 
 TEST(RoomModelTest, IncompleteObjectsWhoseBoxesTouchArePiecesOfOne) {
