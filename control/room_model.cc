@@ -68,17 +68,18 @@ bool Modeler::CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& 
   // Remembered either way: a third side found later still closes it.
   closed_by_contour_.push_back(object_id);
   if (loop.size() >= 3) contour_loops_.push_back(loop);
-  Update(lines, trajectory);
-  for (const auto& o : model_.objects) {
-    if (o.id == object_id) return o.complete;
-  }
-  return false;
+  return CompleteAfterUpdate(object_id, lines, trajectory);
 }
 
 bool Modeler::CloseAlongWall(int object_id, const std::vector<Eigen::Vector2d>& trace,
                              const std::vector<slam::LineFeature>& lines,
                              const std::vector<TimedPose>& trajectory) {
   if (!trace.empty()) wall_traces_.push_back(trace);
+  return CompleteAfterUpdate(object_id, lines, trajectory);
+}
+
+bool Modeler::CompleteAfterUpdate(int object_id, const std::vector<slam::LineFeature>& lines,
+                                  const std::vector<TimedPose>& trajectory) {
   Update(lines, trajectory);
   for (const auto& o : model_.objects) {
     if (o.id == object_id) return o.complete;
@@ -120,8 +121,10 @@ void Modeler::Seed(const EnvironmentModel& saved, std::vector<TimedPose> saved_t
     next_id_ = std::max(next_id_, o.id + 1);
     // (Complete stays complete: a side inferred from a contour, all round or
     // along the wall, is not inferred again without it.)
-    if (o.complete) closed_by_contour_.push_back(o.id);
-    if (o.complete) closed_along_wall_.push_back(o.id);
+    if (o.complete) {
+      closed_by_contour_.push_back(o.id);
+      closed_along_wall_.push_back(o.id);
+    }
     if (o.given_up) given_up_.emplace_back(o.id, o.note);
   }
 }
@@ -312,23 +315,27 @@ ObjectModel BuildObject(const std::vector<Side>& sides, const std::vector<size_t
   return obj;
 }
 
-// The one edge of a wall-contact object's box (0 bottom, 1 right, 2 top, 3
-// left) that is neither against a wall nor a face seen from outside; -1 if
-// there is none or more than one.
+// A box's edges, numbered 0 bottom, 1 right, 2 top, 3 left: its offset (y for
+// the horizontal edges 0 and 2, x for the others) and the way out of the box
+// across it (-1: toward the lesser coordinate, as Side::seen_from).
+double EdgeOffset(const Box& b, int e) {
+  return e == 0 ? b.ymin : e == 1 ? b.xmax : e == 2 ? b.ymax : b.xmin;
+}
+int EdgeOutward(int e) { return e == 0 || e == 3 ? -1 : 1; }
+
+// The one edge of a wall-contact object's box that is neither against a wall
+// nor a face seen from outside; -1 if there is none or more than one.
 int MissingEdge(const std::vector<Side>& sides, const std::vector<size_t>& g, const Box& b,
                 const RoomModel& room, const ModelOptions& o) {
   if (!room.box || b.width() < 2 * o.collinear_m || b.height() < 2 * o.collinear_m) return -1;
-  const Box& r = *room.box;
-  const double at[4] = {b.ymin, b.xmax, b.ymax, b.xmin};
-  const double wall[4] = {r.ymin, r.xmax, r.ymax, r.xmin};
   int missing = -1;
   for (int e = 0; e < 4; ++e) {
-    if (std::abs(at[e] - wall[e]) < o.wall_contact_m) continue;
+    const double at = EdgeOffset(b, e);
+    if (std::abs(at - EdgeOffset(*room.box, e)) < o.wall_contact_m) continue;
     const bool horizontal = e % 2 == 0;
-    const int outward = e == 0 || e == 3 ? -1 : 1;
     const bool face = std::any_of(g.begin(), g.end(), [&](size_t i) {
       const Side& s = sides[i];
-      return s.horizontal == horizontal && s.seen_from == outward && std::abs(s.c - at[e]) < o.collinear_m;
+      return s.horizontal == horizontal && s.seen_from == EdgeOutward(e) && std::abs(s.c - at) < o.collinear_m;
     });
     if (face) continue;
     if (missing >= 0) return -1;
@@ -343,8 +350,8 @@ int MissingEdge(const std::vector<Side>& sides, const std::vector<size_t>& g, co
 // passes its corner rather than its middle.)
 bool TracePassesEdge(const std::vector<Eigen::Vector2d>& trace, const Box& b, int e, double band_m) {
   const bool horizontal = e % 2 == 0;
-  const double at = e == 0 ? b.ymin : e == 1 ? b.xmax : e == 2 ? b.ymax : b.xmin;
-  const double outward = e == 0 || e == 3 ? -1 : 1;
+  const double at = EdgeOffset(b, e);
+  const double outward = EdgeOutward(e);
   const Eigen::Vector2d mid = horizontal ? Eigen::Vector2d(0.5 * (b.xmin + b.xmax), at)
                                          : Eigen::Vector2d(at, 0.5 * (b.ymin + b.ymax));
   return std::any_of(trace.begin(), trace.end(), [&](const Eigen::Vector2d& p) {
@@ -356,34 +363,38 @@ bool TracePassesEdge(const std::vector<Eigen::Vector2d>& trace, const Box& b, in
 // Incomplete objects whose boxes touch (within merge_touching_m) are pieces of
 // one: compound furniture whose step between its boxes was too short to map.
 // Groups with a side inside a followed contour are left as the contour joined them.
-std::vector<std::vector<size_t>> MergeTouching(const std::vector<Side>& sides, std::vector<std::vector<size_t>> groups,
-                                               const std::vector<bool>& side_in_loop, const RoomModel& room,
-                                               const ModelOptions& o) {
-  if (o.merge_touching_m <= 0) return groups;
-  const auto mergeable = [&](const std::vector<size_t>& g, const ObjectModel& obj) {
-    return !obj.complete && std::none_of(g.begin(), g.end(), [&](size_t i) { return side_in_loop[i]; });
+// `groups` in, the joined groups out; `objects`: one built object per group out.
+void MergeTouching(const std::vector<Side>& sides, const std::vector<bool>& side_in_loop, const RoomModel& room,
+                   const ModelOptions& o, std::vector<std::vector<size_t>>* groups,
+                   std::vector<ObjectModel>* objects) {
+  std::vector<std::vector<size_t>>& gs = *groups;
+  std::vector<ObjectModel>& objs = *objects;
+  objs.clear();
+  for (const auto& g : gs) objs.push_back(BuildObject(sides, g, room, o));
+  if (o.merge_touching_m <= 0) return;
+  const auto mergeable = [&](size_t k) {
+    return !objs[k].complete && std::none_of(gs[k].begin(), gs[k].end(), [&](size_t i) { return side_in_loop[i]; });
   };
+  // After each join the scan starts again: the joined box may now touch another.
   for (bool merged = true; merged;) {
     merged = false;
-    std::vector<ObjectModel> objs;
-    for (const auto& g : groups) objs.push_back(BuildObject(sides, g, room, o));
-    for (size_t i = 0; i < groups.size() && !merged; ++i) {
-      if (!mergeable(groups[i], objs[i])) continue;
-      for (size_t j = i + 1; j < groups.size() && !merged; ++j) {
-        if (!mergeable(groups[j], objs[j])) continue;
+    for (size_t i = 0; i < gs.size() && !merged; ++i) {
+      if (!mergeable(i)) continue;
+      for (size_t j = i + 1; j < gs.size() && !merged; ++j) {
+        if (!mergeable(j)) continue;
         const Box& a = objs[i].box;
         const Box& b = objs[j].box;
-        const double gx = std::max(a.xmin - b.xmax, b.xmin - a.xmax);
-        const double gy = std::max(a.ymin - b.ymax, b.ymin - a.ymax);
-        if (gx < o.merge_touching_m && gy < o.merge_touching_m) {
-          groups[i].insert(groups[i].end(), groups[j].begin(), groups[j].end());
-          groups.erase(groups.begin() + static_cast<std::ptrdiff_t>(j));
+        if (Overlap1d(a.xmin, a.xmax, b.xmin, b.xmax) > -o.merge_touching_m &&
+            Overlap1d(a.ymin, a.ymax, b.ymin, b.ymax) > -o.merge_touching_m) {
+          gs[i].insert(gs[i].end(), gs[j].begin(), gs[j].end());
+          gs.erase(gs.begin() + static_cast<std::ptrdiff_t>(j));
+          objs.erase(objs.begin() + static_cast<std::ptrdiff_t>(j));
+          objs[i] = BuildObject(sides, gs[i], room, o);
           merged = true;
         }
       }
     }
   }
-  return groups;
 }
 
 }  // namespace
@@ -511,15 +522,15 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
   std::vector<bool> is_wall;
   m.room = FindRoom(sides, options_.collinear_m, &is_wall);
   std::vector<bool> side_in_loop;
-  const auto groups = MergeTouching(sides, GroupObjects(sides, is_wall, contour_loops_, options_, &side_in_loop),
-                                    side_in_loop, m.room, options_);
+  auto groups = GroupObjects(sides, is_wall, contour_loops_, options_, &side_in_loop);
+  MergeTouching(sides, side_in_loop, m.room, options_, &groups, &m.objects);
   std::vector<bool> group_in_loop, group_inferred;
-  for (const auto& g : groups) {
+  for (size_t gi = 0; gi < groups.size(); ++gi) {
+    const auto& g = groups[gi];
     group_in_loop.push_back(
         std::any_of(g.begin(), g.end(), [&](size_t i) { return side_in_loop[i]; }));
-    m.objects.push_back(BuildObject(sides, g, m.room, options_));
     // Its free sides followed along the wall: the one side left is where the robot went past.
-    const ObjectModel& obj = m.objects.back();
+    const ObjectModel& obj = m.objects[gi];
     const int e = obj.kind == ObjectKind::kWallContact && !obj.complete && obj.lines.size() >= 2
                       ? MissingEdge(sides, g, obj.box, m.room, options_)
                       : -1;

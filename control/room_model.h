@@ -121,6 +121,9 @@ class Modeler {
   // ids otherwise), and applies closed contours and given-up notes.
   void AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop,
                  const std::vector<bool>& group_inferred);
+  // Updates the model; whether object `object_id` is in it complete.
+  bool CompleteAfterUpdate(int object_id, const std::vector<slam::LineFeature>& lines,
+                           const std::vector<TimedPose>& trajectory);
   void NameNewObject(ObjectModel* obj);
   // The piece NoteMoved was told of that has obj's size: obj takes its id
   // and a "moved" note (false: none).

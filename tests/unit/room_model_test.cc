@@ -175,7 +175,7 @@ TEST(RoomModelTest, SidesInsideAFollowedContourAreOneObject) {
 // A box against the bottom wall (x 1.5..2.3, y 0..0.6) whose right side was
 // never mapped (a short side turned round on an outer corner), and the robot's
 // way along its free sides: up beside the left side, over the top, down beside
-// the right side, then along the wall away (`leave_x`: +1 rightwards).
+// the right side (`right_side_offset_m` off it), then along the wall away.
 struct AlongWall {
   std::vector<slam::LineFeature> lines;
   std::vector<TimedPose> trajectory;
