@@ -83,6 +83,7 @@ void ContourFollow::Start(double t, double theta, int slam_windows) {
   since_ = t;
   turned_ = 0;
   loops_done_ = 0;
+  away_ = false;
   trace_.clear();
   last_theta_ = theta;
   windows_seen_ = slam_windows;
@@ -142,6 +143,15 @@ ContourFollow::Result ContourFollow::Step(double t, const slam::Slam& slam, cons
     }
     return {Status::kFreeSidesDone, {}};
   }
+  // A free object near a wall: the robot met the wall in the gap beside it and
+  // follows the wall away. The side facing the wall, where it cannot go, may be
+  // inferred (once each time it leaves; otherwise it goes on, and may come round).
+  const bool away = !at_wall_ && t - since_ > o.contour_leave_after_s && LeftTarget(modeler->model(), here);
+  if (away && !away_) {
+    away_ = true;
+    if (modeler->CloseNearWall(target_, slam.map_lines(), slam.map_trajectory())) return {Status::kClosed, {}};
+  }
+  if (!away) away_ = false;
   if (t - since_ > o.contour_timeout_s) return {Status::kTimedOut, {}};
   return {Status::kFollowing, tw};
 }

@@ -82,7 +82,8 @@ class ContourFollow {
               WallFollower* follower, Modeler* modeler);
 
  private:
-  // The robot is far enough from the (wall-contact) target: its free sides were followed.
+  // The robot is far enough from the target: a wall-contact one's free sides were followed,
+  // a free one was left along a wall.
   bool LeftTarget(const EnvironmentModel& m, const Pose2& here) const;
 
   ContourOptions options_;
@@ -94,6 +95,7 @@ class ContourFollow {
   double last_theta_ = 0;
   int loops_done_ = 0;
   int windows_seen_ = 0;
+  bool away_ = false;  // a free target: left along a wall (CloseNearWall asked)
   std::vector<Eigen::Vector2d> trace_;  // map frame: where contour following went
 };
 

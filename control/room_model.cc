@@ -48,6 +48,9 @@ options::Table<ModelOptions> ModelKeys() {
       {"trace_band_m", &O::trace_band_m, 0.05, 3, "m",
        "a wall-contact object's contour along the wall this close to the middle of an edge of its box, outside "
        "it, went past that side (its last side is inferred)"},
+      {"narrow_gap_m", &O::narrow_gap_m, 0, 3, "m",
+       "a free object's one unmapped side facing a wall closer than this is inferred once its contour has left "
+       "it along that wall (the robot cannot go between; 0: off)"},
   };
   return kKeys;
 }
@@ -78,6 +81,14 @@ bool Modeler::CloseAlongWall(int object_id, const std::vector<Eigen::Vector2d>& 
   return CompleteAfterUpdate(object_id, lines, trajectory);
 }
 
+bool Modeler::CloseNearWall(int object_id, const std::vector<slam::LineFeature>& lines,
+                            const std::vector<TimedPose>& trajectory) {
+  if (std::find(left_near_wall_.begin(), left_near_wall_.end(), object_id) == left_near_wall_.end()) {
+    left_near_wall_.push_back(object_id);
+  }
+  return CompleteAfterUpdate(object_id, lines, trajectory);
+}
+
 bool Modeler::CompleteAfterUpdate(int object_id, const std::vector<slam::LineFeature>& lines,
                                   const std::vector<TimedPose>& trajectory) {
   Update(lines, trajectory);
@@ -95,6 +106,7 @@ void Modeler::NoteMoved(int id, const Box& was) {
                            closed_by_contour_.end());
   closed_along_wall_.erase(std::remove(closed_along_wall_.begin(), closed_along_wall_.end(), id),
                            closed_along_wall_.end());
+  left_near_wall_.erase(std::remove(left_near_wall_.begin(), left_near_wall_.end(), id), left_near_wall_.end());
   given_up_.erase(std::remove_if(given_up_.begin(), given_up_.end(), [&](const auto& g) { return g.first == id; }),
                   given_up_.end());
   model_.objects.erase(std::remove_if(model_.objects.begin(), model_.objects.end(),
@@ -114,6 +126,7 @@ void Modeler::Seed(const EnvironmentModel& saved, std::vector<TimedPose> saved_t
   given_up_.clear();
   closed_by_contour_.clear();
   closed_along_wall_.clear();
+  left_near_wall_.clear();
   contour_loops_.clear();
   wall_traces_.clear();
   next_id_ = 1;
@@ -323,8 +336,8 @@ double EdgeOffset(const Box& b, int e) {
 }
 int EdgeOutward(int e) { return e == 0 || e == 3 ? -1 : 1; }
 
-// The one edge of a wall-contact object's box that is neither against a wall
-// nor a face seen from outside; -1 if there is none or more than one.
+// The one edge of an object's box that is neither against a wall nor a face
+// seen from outside; -1 if there is none or more than one.
 int MissingEdge(const std::vector<Side>& sides, const std::vector<size_t>& g, const Box& b,
                 const RoomModel& room, const ModelOptions& o) {
   if (!room.box || b.width() < 2 * o.collinear_m || b.height() < 2 * o.collinear_m) return -1;
@@ -446,6 +459,7 @@ void Modeler::RenameNewAsMoved(ObjectModel* obj) {
                notes_.end());
   std::replace(closed_by_contour_.begin(), closed_by_contour_.end(), was, obj->id);
   std::replace(closed_along_wall_.begin(), closed_along_wall_.end(), was, obj->id);
+  std::replace(left_near_wall_.begin(), left_near_wall_.end(), was, obj->id);
   for (auto& g : given_up_) {
     if (g.first == was) g.first = obj->id;
   }
@@ -453,7 +467,7 @@ void Modeler::RenameNewAsMoved(ObjectModel* obj) {
 }
 
 void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop,
-                        const std::vector<bool>& group_inferred) {
+                        const std::vector<bool>& group_inferred, const std::vector<bool>& group_narrow) {
   // Stable ids: an object keeps the id of the previous object it overlaps most.
   std::vector<bool> taken(model_.objects.size(), false);
   for (size_t gi = 0; gi < m->objects.size(); ++gi) {
@@ -492,10 +506,15 @@ void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_l
     }
     const bool along = group_inferred[gi] || std::find(closed_along_wall_.begin(), closed_along_wall_.end(),
                                                        obj.id) != closed_along_wall_.end();
-    if (along && !obj.complete && obj.lines.size() >= 2) {
+    const bool left_near =
+        std::find(left_near_wall_.begin(), left_near_wall_.end(), obj.id) != left_near_wall_.end();
+    const bool narrow = group_narrow[gi] && left_near;
+    if ((along || narrow) && !obj.complete && obj.lines.size() >= 2) {
       obj.complete = true;
-      if (group_inferred[gi]) closed_along_wall_.push_back(obj.id);
-      const char* why = "one side inferred from the contour along the wall";
+      if (group_inferred[gi] || narrow) closed_along_wall_.push_back(obj.id);
+      const char* why = narrow || (left_near && !group_inferred[gi])
+                            ? "the side facing the wall inferred (too near it to go between)"
+                            : "one side inferred from the contour along the wall";
       obj.note = obj.note.empty() ? why : obj.note + "; " + why;
     }
     for (const auto& [gid, why] : given_up_) {
@@ -524,7 +543,7 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
   std::vector<bool> side_in_loop;
   auto groups = GroupObjects(sides, is_wall, contour_loops_, options_, &side_in_loop);
   MergeTouching(sides, side_in_loop, m.room, options_, &groups, &m.objects);
-  std::vector<bool> group_in_loop, group_inferred;
+  std::vector<bool> group_in_loop, group_inferred, group_narrow;
   for (size_t gi = 0; gi < groups.size(); ++gi) {
     const auto& g = groups[gi];
     group_in_loop.push_back(
@@ -537,8 +556,13 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
     group_inferred.push_back(e >= 0 && std::any_of(wall_traces_.begin(), wall_traces_.end(), [&](const auto& tr) {
                                return TracePassesEdge(tr, obj.box, e, options_.trace_band_m);
                              }));
+    // A free object's one side not mapped faces a wall too near for the robot to go between.
+    const int f = obj.kind == ObjectKind::kFree && !obj.complete && obj.lines.size() >= 3 && options_.narrow_gap_m > 0
+                      ? MissingEdge(sides, g, obj.box, m.room, options_)
+                      : -1;
+    group_narrow.push_back(f >= 0 && std::abs(EdgeOffset(obj.box, f) - EdgeOffset(*m.room.box, f)) < options_.narrow_gap_m);
   }
-  AssignIds(&m, group_in_loop, group_inferred);
+  AssignIds(&m, group_in_loop, group_inferred, group_narrow);
   std::sort(m.objects.begin(), m.objects.end(),
             [](const auto& a, const auto& b) { return a.id < b.id; });
   model_ = std::move(m);

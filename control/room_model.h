@@ -34,6 +34,11 @@ struct ModelOptions {
                                      // piece's sides that no corner joined; 0: off)
   double trace_band_m = 0.6;         // a contour along the wall this close to the middle of a
                                      // box edge, outside it, went past that side
+  double narrow_gap_m = 0.9;         // a free object's one unmapped side facing a wall closer
+                                     // than this is inferred once its contour has left it along
+                                     // that wall: the robot, keeping the follow distance (0.40 m)
+                                     // from both and stopping 0.45 m before the wall, cannot go
+                                     // between (0: off)
 };
 options::Table<ModelOptions> ModelKeys();  // [model]
 
@@ -97,6 +102,14 @@ class Modeler {
   bool CloseAlongWall(int object_id, const std::vector<Eigen::Vector2d>& trace,
                       const std::vector<slam::LineFeature>& lines,
                       const std::vector<TimedPose>& trajectory);
+  // Contour following has left free object `object_id` along a wall (it met
+  // the wall in the gap beside the object and followed it away): if exactly
+  // one side of its box is not a mapped face and that side faces a wall
+  // within narrow_gap_m, where the robot cannot go between, the side is
+  // inferred and the object counts as complete (noted). Any later Update
+  // applies it too. False if still incomplete.
+  bool CloseNearWall(int object_id, const std::vector<slam::LineFeature>& lines,
+                     const std::vector<TimedPose>& trajectory);
   // Starts from a saved model (issue 14: a mission continuing in a saved map):
   // its objects' ids are kept by the next Update (by their boxes, as ever),
   // complete objects stay complete (a side inferred from a contour is not
@@ -120,7 +133,7 @@ class Modeler {
   // Gives the new model's objects the ids of the old ones they overlap most (new
   // ids otherwise), and applies closed contours and given-up notes.
   void AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop,
-                 const std::vector<bool>& group_inferred);
+                 const std::vector<bool>& group_inferred, const std::vector<bool>& group_narrow);
   // Updates the model; whether object `object_id` is in it complete.
   bool CompleteAfterUpdate(int object_id, const std::vector<slam::LineFeature>& lines,
                            const std::vector<TimedPose>& trajectory);
@@ -137,6 +150,7 @@ class Modeler {
   std::vector<std::pair<int, std::string>> given_up_;
   std::vector<int> closed_by_contour_;
   std::vector<int> closed_along_wall_;  // ids CloseAlongWall's traces completed (or a saved map's complete)
+  std::vector<int> left_near_wall_;     // ids CloseNearWall was told of
   std::vector<std::vector<Eigen::Vector2d>> contour_loops_;  // map frame
   std::vector<std::vector<Eigen::Vector2d>> wall_traces_;    // CloseAlongWall's (map frame)
   std::vector<TimedPose> prior_trajectory_;  // Seed's (map frame)

@@ -255,6 +255,83 @@ TEST(RoomModelTest, ASideInferredAlongTheWallStaysInferredInASavedMap) {
   EXPECT_EQ(again.note, "one side inferred from the contour along the wall");
 }
 
+// A free box x 1.5..2.3 standing `gap_m` above the bottom wall, three sides
+// mapped (left, top, right); the robot followed them and met the wall in the
+// gap below it.
+AlongWall FreeBoxAboveTheBottomWall(double gap_m) {
+  AlongWall a;
+  a.lines = Room();
+  const double y0 = gap_m, y1 = gap_m + 0.6;
+  a.lines.push_back(Line(6, 1.5, y0, 1.5, y1 - 0.02));
+  a.lines.push_back(Line(7, 1.52, y1, 2.28, y1));
+  a.lines.push_back(Line(8, 2.3, y1 - 0.02, 2.3, y0));
+  for (const auto& p : Loop()) {
+    if (p.pose.y > 0.5) a.trajectory.push_back(p);
+  }
+  for (double y = y0; y <= y1 + 0.4; y += 0.1) a.trace.emplace_back(1.1, y);
+  for (double x = 1.1; x <= 2.7; x += 0.1) a.trace.emplace_back(x, y1 + 0.4);
+  for (double y = y1 + 0.4; y >= 0.4; y -= 0.1) a.trace.emplace_back(2.7, y);
+  for (double x = 2.7; x <= 3.6; x += 0.1) a.trace.emplace_back(x, 0.4);  // along the wall, away
+  for (const auto& p : a.trace) a.trajectory.push_back({0, {p.x(), p.y(), 0}});
+  return a;
+}
+
+TEST(RoomModelTest, AFreeObjectsSideFacingAWallTooNearToGoBetweenIsInferredOnceLeftThere) {
+  const AlongWall a = FreeBoxAboveTheBottomWall(0.6);  // the robot needs 0.85 m
+  Modeler m{ModelOptions{}};
+  ASSERT_EQ(m.Update(a.lines, a.trajectory).objects.size(), 1u);
+  const int id = m.model().objects[0].id;
+  EXPECT_EQ(m.model().objects[0].kind, ObjectKind::kFree);
+  EXPECT_FALSE(m.model().objects[0].complete);  // not before the robot has tried to go round
+  EXPECT_TRUE(m.CloseNearWall(id, a.lines, a.trajectory));
+  const ObjectModel& o = m.model().objects[0];
+  EXPECT_EQ(o.id, id);
+  EXPECT_TRUE(o.complete);
+  EXPECT_EQ(o.kind, ObjectKind::kFree);
+  EXPECT_EQ(o.note, "the side facing the wall inferred (too near it to go between)");
+  EXPECT_NEAR(o.box.ymin, 0.6, 1e-9);  // from its sides' ends
+  // Kept by later updates, and in a saved map.
+  auto more = a.lines;
+  more.push_back(Line(20, 3.0, 3.0, 3.5, 3.0));
+  EXPECT_TRUE(m.Update(more, a.trajectory).objects[0].complete);
+  Modeler next{ModelOptions{}};
+  next.Seed(m.model(), a.trajectory);
+  EXPECT_TRUE(next.Update(a.lines, {}).objects[0].complete);
+}
+
+TEST(RoomModelTest, NoSideFacingAWallIsInferredWhereTheRobotCouldGoBetween) {
+  {
+    const AlongWall a = FreeBoxAboveTheBottomWall(1.0);
+    Modeler m{ModelOptions{}};
+    const int id = m.Update(a.lines, a.trajectory).objects[0].id;
+    EXPECT_FALSE(m.CloseNearWall(id, a.lines, a.trajectory));
+    EXPECT_FALSE(m.model().objects[0].complete);
+  }
+  {  // Off.
+    const AlongWall a = FreeBoxAboveTheBottomWall(0.6);
+    ModelOptions off;
+    off.narrow_gap_m = 0;
+    Modeler m{off};
+    const int id = m.Update(a.lines, a.trajectory).objects[0].id;
+    EXPECT_FALSE(m.CloseNearWall(id, a.lines, a.trajectory));
+  }
+  {  // Two sides mapped: where the others are is not known.
+    AlongWall a = FreeBoxAboveTheBottomWall(0.6);
+    a.lines.pop_back();
+    Modeler m{ModelOptions{}};
+    const int id = m.Update(a.lines, a.trajectory).objects[0].id;
+    EXPECT_FALSE(m.CloseNearWall(id, a.lines, a.trajectory));
+  }
+  {  // The side not mapped faces into the room (the top one): not inferred.
+    AlongWall a = FreeBoxAboveTheBottomWall(0.6);
+    a.lines[a.lines.size() - 2] = Line(7, 1.52, 0.6, 2.28, 0.6);  // the bottom seen, not the top
+    for (double x = 1.5; x <= 2.3; x += 0.1) a.trajectory.push_back({0, {x, 0.3, 0}});
+    Modeler m{ModelOptions{}};
+    const int id = m.Update(a.lines, a.trajectory).objects[0].id;
+    EXPECT_FALSE(m.CloseNearWall(id, a.lines, a.trajectory));
+  }
+}
+
 TEST(RoomModelTest, IncompleteObjectsWhoseBoxesTouchArePiecesOfOne) {
   // Compound furniture: a box 1.5..2.0 x 1.5..2.0 seen from below and the left,
   // and a lower one 2.0..2.6 x 1.5..1.8 beside it seen from the right and above;
