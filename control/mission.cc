@@ -570,6 +570,11 @@ WheelCommand Mission::GoToObject(double t, const slam::Slam& slam, const Environ
       return Halt();
     }
   }
+  // No way to its sides: one facing a wall too near to go between is inferred.
+  if (modeler_.CloseNearWall(target_, slam.map_lines(), slam.map_trajectory())) {
+    reason_ = "object " + std::to_string(target_) + " complete (P1 unreachable, the side facing the wall inferred)";
+    return Halt();
+  }
   modeler_.GiveUp(target_, "P1 unreachable");
   reason_ = "object " + std::to_string(target_) + ": P1 unreachable";
   return Halt();
@@ -597,8 +602,11 @@ bool Mission::StartSurvey(double t, const slam::Slam& slam, const EnvironmentMod
   return false;
 }
 
-WheelCommand Mission::AbandonGoTo(double t, const std::string& why) {
+WheelCommand Mission::AbandonGoTo(double t, const slam::Slam& slam, const std::string& why) {
   if (target_ == 0) return To(MissionState::kModel, t, "survey point: " + why);
+  if (modeler_.CloseNearWall(target_, slam.map_lines(), slam.map_trajectory())) {
+    return To(MissionState::kModel, t, "object " + std::to_string(target_) + " complete (P1: " + why + ", the side facing the wall inferred)");
+  }
   modeler_.GiveUp(target_, "P1: " + why);
   return To(MissionState::kModel, t, "object " + std::to_string(target_) + ", P1: " + why);
 }
@@ -610,7 +618,7 @@ WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam,
     case GoTo::Status::kDriving:
       return ToWheels(r.twist, dt);
     case GoTo::Status::kGiveUp:
-      return AbandonGoTo(t, r.why);
+      return AbandonGoTo(t, slam, r.why);
     case GoTo::Status::kArrived:
       break;
   }

@@ -221,7 +221,7 @@ class Mission {
   // Plans to the nearest pending object's P1 and starts going there.
   WheelCommand GoToObject(double t, const slam::Slam& slam, const EnvironmentModel& m);
   // Gives the go-to's goal up (the object, noted in the model; or the survey point).
-  WheelCommand AbandonGoTo(double t, const std::string& why);
+  WheelCommand AbandonGoTo(double t, const slam::Slam& slam, const std::string& why);
   // Picks the next survey point and starts going there; false if none is left.
   bool StartSurvey(double t, const slam::Slam& slam, const EnvironmentModel& m);
   // Modelled and explored: done, or in mode clean, plan the cleaning and start it.

@@ -102,8 +102,9 @@ class Modeler {
   bool CloseAlongWall(int object_id, const std::vector<Eigen::Vector2d>& trace,
                       const std::vector<slam::LineFeature>& lines,
                       const std::vector<TimedPose>& trajectory);
-  // Contour following has left free object `object_id` along a wall (it met
-  // the wall in the gap beside the object and followed it away): if exactly
+  // The robot could not go round free object `object_id`: contour following
+  // left it along a wall (it met the wall in the gap beside the object and
+  // followed it away), or no way to its sides was found. If exactly
   // one side of its box is not a mapped face and that side faces a wall
   // within narrow_gap_m, where the robot cannot go between, the side is
   // inferred and the object counts as complete (noted). Any later Update
