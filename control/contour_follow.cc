@@ -11,7 +11,8 @@ options::Table<ContourOptions> ContourKeys() {
       {"contour_timeout_s", &O::contour_timeout_s, 1, 3600, "s",
        "give up completing an object after this"},
       {"contour_leave_m", &O::contour_leave_m, 0.05, 10, "m",
-       "a wall-contact object's free sides are done this much beyond the follow distance from it"},
+       "a wall-contact object's free sides are done (a free one left along a wall) this much beyond the "
+       "follow distance from it"},
       {"contour_loops", &O::contour_loops, 1, 10, "", "times round an object before giving it up"},
       {"contour_leave_after_s", &O::contour_leave_after_s, 0, 600, "s",
        "... checked only after following it this long"},
@@ -146,10 +147,13 @@ ContourFollow::Result ContourFollow::Step(double t, const slam::Slam& slam, cons
   // A free object near a wall: the robot met the wall in the gap beside it and
   // follows the wall away. The side facing the wall, where it cannot go, may be
   // inferred (once each time it leaves; otherwise it goes on, and may come round).
-  const bool away = !at_wall_ && t - since_ > o.contour_leave_after_s && LeftTarget(modeler->model(), here);
+  const bool away =
+      !at_wall_ && t - since_ > o.contour_leave_after_s && LeftTarget(modeler->model(), here);
   if (away && !away_) {
     away_ = true;
-    if (modeler->CloseNearWall(target_, slam.map_lines(), slam.map_trajectory())) return {Status::kClosed, {}};
+    if (modeler->CloseNearWall(target_, slam.map_lines(), slam.map_trajectory())) {
+      return {Status::kClosed, {}};
+    }
   }
   if (!away) away_ = false;
   if (t - since_ > o.contour_timeout_s) return {Status::kTimedOut, {}};

@@ -22,7 +22,8 @@ struct ContourOptions {
   int contour_loops = 2;                 // times round an object before giving it up
   double contour_leave_m = 0.6;          // a wall-contact object's free sides have been followed
                                          // once the robot is this much farther than the follow
-                                         // distance from it (it follows the wall away)
+                                         // distance from it (it follows the wall away); a free
+                                         // object is then asked to be closed near the wall
   double contour_leave_after_s = 5.0;    // ... checked only after following it this long
   double contour_turn_margin_rad = 0.3;  // all round: turned 2 pi plus this (clockwise)
   double contour_trace_step_m = 0.05;    // the followed contour is recorded at this spacing
@@ -56,8 +57,8 @@ class ContourFollow {
   enum class Status {
     kFollowing,
     kComplete,       // the model completed it from new lines
-    kClosed,         // all round it, or along a wall-contact object's free sides: the model
-                     // closed the last side from the contour
+    kClosed,         // all round it, or along a wall-contact object's free sides, or a free
+                     // object left along a wall too near it: the model inferred the last side
     kIncomplete,     // all round it contour_loops times, still incomplete
     kFreeSidesDone,  // a wall-contact object's free sides followed, still incomplete
     kTimedOut,

@@ -571,13 +571,24 @@ WheelCommand Mission::GoToObject(double t, const slam::Slam& slam, const Environ
     }
   }
   // No way to its sides: one facing a wall too near to go between is inferred.
-  if (modeler_.CloseNearWall(target_, slam.map_lines(), slam.map_trajectory())) {
-    reason_ = "object " + std::to_string(target_) + " complete (P1 unreachable, the side facing the wall inferred)";
+  if (InferNearWall(slam)) {
+    reason_ = "object " + std::to_string(target_) +
+              " complete (P1 unreachable, the side facing the wall inferred)";
     return Halt();
   }
   modeler_.GiveUp(target_, "P1 unreachable");
   reason_ = "object " + std::to_string(target_) + ": P1 unreachable";
   return Halt();
+}
+
+bool Mission::InferNearWall(const slam::Slam& slam) {
+  for (const auto& o : modeler_.model().objects) {
+    if (o.id == target_) {
+      return o.kind == ObjectKind::kFree &&
+             modeler_.CloseNearWall(target_, slam.map_lines(), slam.map_trajectory());
+    }
+  }
+  return false;
 }
 
 bool Mission::StartSurvey(double t, const slam::Slam& slam, const EnvironmentModel& m) {
@@ -604,8 +615,10 @@ bool Mission::StartSurvey(double t, const slam::Slam& slam, const EnvironmentMod
 
 WheelCommand Mission::AbandonGoTo(double t, const slam::Slam& slam, const std::string& why) {
   if (target_ == 0) return To(MissionState::kModel, t, "survey point: " + why);
-  if (modeler_.CloseNearWall(target_, slam.map_lines(), slam.map_trajectory())) {
-    return To(MissionState::kModel, t, "object " + std::to_string(target_) + " complete (P1: " + why + ", the side facing the wall inferred)");
+  if (InferNearWall(slam)) {
+    return To(MissionState::kModel, t,
+              "object " + std::to_string(target_) + " complete (P1: " + why +
+                  ", the side facing the wall inferred)");
   }
   modeler_.GiveUp(target_, "P1: " + why);
   return To(MissionState::kModel, t, "object " + std::to_string(target_) + ", P1: " + why);

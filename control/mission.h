@@ -220,8 +220,12 @@ class Mission {
                            bool bumped);
   // Plans to the nearest pending object's P1 and starts going there.
   WheelCommand GoToObject(double t, const slam::Slam& slam, const EnvironmentModel& m);
-  // Gives the go-to's goal up (the object, noted in the model; or the survey point).
+  // Gives the go-to's goal up (the object, noted in the model, unless a free
+  // object's side facing a near wall is inferred; or the survey point).
   WheelCommand AbandonGoTo(double t, const slam::Slam& slam, const std::string& why);
+  // The target is free and the model infers its side facing a wall too near to
+  // go between (Modeler::CloseNearWall): it is complete.
+  bool InferNearWall(const slam::Slam& slam);
   // Picks the next survey point and starts going there; false if none is left.
   bool StartSurvey(double t, const slam::Slam& slam, const EnvironmentModel& m);
   // Modelled and explored: done, or in mode clean, plan the cleaning and start it.

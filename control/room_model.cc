@@ -65,6 +65,20 @@ int EnvironmentModel::pending() const {
   return n;
 }
 
+namespace {
+constexpr char kByContour[] = "one side inferred from the contour";
+constexpr char kAlongWall[] = "one side inferred from the contour along the wall";
+constexpr char kNearWall[] = "the side facing the wall inferred (too near it to go between)";
+
+// Which side inference a saved complete object's note names (nullptr: none).
+const char* SavedInference(const std::string& note) {
+  for (const char* why : {kAlongWall, kNearWall, kByContour}) {
+    if (note.find(why) != std::string::npos) return why;
+  }
+  return nullptr;
+}
+}  // namespace
+
 bool Modeler::CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& loop,
                              const std::vector<slam::LineFeature>& lines,
                              const std::vector<TimedPose>& trajectory) {
@@ -104,8 +118,8 @@ void Modeler::NoteMoved(int id, const Box& was) {
   // judged on what is seen of it there.
   closed_by_contour_.erase(std::remove(closed_by_contour_.begin(), closed_by_contour_.end(), id),
                            closed_by_contour_.end());
-  closed_along_wall_.erase(std::remove(closed_along_wall_.begin(), closed_along_wall_.end(), id),
-                           closed_along_wall_.end());
+  inferred_.erase(std::remove_if(inferred_.begin(), inferred_.end(), [&](const auto& i) { return i.first == id; }),
+                  inferred_.end());
   left_near_wall_.erase(std::remove(left_near_wall_.begin(), left_near_wall_.end(), id), left_near_wall_.end());
   given_up_.erase(std::remove_if(given_up_.begin(), given_up_.end(), [&](const auto& g) { return g.first == id; }),
                   given_up_.end());
@@ -125,19 +139,17 @@ void Modeler::Seed(const EnvironmentModel& saved, std::vector<TimedPose> saved_t
   prior_trajectory_ = std::move(saved_trajectory);
   given_up_.clear();
   closed_by_contour_.clear();
-  closed_along_wall_.clear();
+  inferred_.clear();
   left_near_wall_.clear();
   contour_loops_.clear();
   wall_traces_.clear();
   next_id_ = 1;
   for (const auto& o : saved.objects) {
     next_id_ = std::max(next_id_, o.id + 1);
-    // (Complete stays complete: a side inferred from a contour, all round or
-    // along the wall, is not inferred again without it.)
-    if (o.complete) {
-      closed_by_contour_.push_back(o.id);
-      closed_along_wall_.push_back(o.id);
-    }
+    // (Complete stays complete, with the inference its note names: a side
+    // inferred from a contour, all round or along or near a wall, is not
+    // inferred again without it.)
+    if (o.complete) inferred_.emplace_back(o.id, SavedInference(o.note));
     if (o.given_up) given_up_.emplace_back(o.id, o.note);
   }
 }
@@ -458,7 +470,9 @@ void Modeler::RenameNewAsMoved(ObjectModel* obj) {
   notes_.erase(std::remove_if(notes_.begin(), notes_.end(), [&](const auto& n) { return n.first == was; }),
                notes_.end());
   std::replace(closed_by_contour_.begin(), closed_by_contour_.end(), was, obj->id);
-  std::replace(closed_along_wall_.begin(), closed_along_wall_.end(), was, obj->id);
+  for (auto& i : inferred_) {
+    if (i.first == was) i.first = obj->id;
+  }
   std::replace(left_near_wall_.begin(), left_near_wall_.end(), was, obj->id);
   for (auto& g : given_up_) {
     if (g.first == was) g.first = obj->id;
@@ -502,20 +516,22 @@ void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_l
     if (contoured && !obj.complete && obj.lines.size() >= 3) {
       obj.complete = true;
       // (After a note saying where it came from: "moved ..." stays first.)
-      obj.note = obj.note.empty() ? "one side inferred from the contour" : obj.note + "; one side inferred from the contour";
+      obj.note = obj.note.empty() ? kByContour : obj.note + "; " + kByContour;
     }
-    const bool along = group_inferred[gi] || std::find(closed_along_wall_.begin(), closed_along_wall_.end(),
-                                                       obj.id) != closed_along_wall_.end();
-    const bool left_near =
+    // Inferred along or near a wall, now or earlier (or complete in a saved map).
+    const auto known = std::find_if(inferred_.begin(), inferred_.end(),
+                                    [&](const auto& i) { return i.first == obj.id; });
+    const bool near_wall =
+        group_narrow[gi] &&
         std::find(left_near_wall_.begin(), left_near_wall_.end(), obj.id) != left_near_wall_.end();
-    const bool narrow = group_narrow[gi] && left_near;
-    if ((along || narrow) && !obj.complete && obj.lines.size() >= 2) {
+    if ((known != inferred_.end() || group_inferred[gi] || near_wall) && !obj.complete &&
+        obj.lines.size() >= 2) {
       obj.complete = true;
-      if (group_inferred[gi] || narrow) closed_along_wall_.push_back(obj.id);
-      const char* why = narrow || (left_near && !group_inferred[gi])
-                            ? "the side facing the wall inferred (too near it to go between)"
-                            : "one side inferred from the contour along the wall";
-      obj.note = obj.note.empty() ? why : obj.note + "; " + why;
+      const char* why = known != inferred_.end() ? known->second
+                        : group_inferred[gi]     ? kAlongWall
+                                                 : kNearWall;
+      if (known == inferred_.end()) inferred_.emplace_back(obj.id, why);
+      if (why != nullptr) obj.note = obj.note.empty() ? why : obj.note + "; " + why;
     }
     for (const auto& [gid, why] : given_up_) {
       if (gid == obj.id && !obj.complete) {

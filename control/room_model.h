@@ -150,8 +150,10 @@ class Modeler {
   int next_id_ = 1;
   std::vector<std::pair<int, std::string>> given_up_;
   std::vector<int> closed_by_contour_;
-  std::vector<int> closed_along_wall_;  // ids CloseAlongWall's traces completed (or a saved map's complete)
-  std::vector<int> left_near_wall_;     // ids CloseNearWall was told of
+  // Objects whose side was inferred along or near a wall, or complete in a saved
+  // map: each id once, with the note's inference (nullptr: none).
+  std::vector<std::pair<int, const char*>> inferred_;
+  std::vector<int> left_near_wall_;  // ids CloseNearWall was told of
   std::vector<std::vector<Eigen::Vector2d>> contour_loops_;  // map frame
   std::vector<std::vector<Eigen::Vector2d>> wall_traces_;    // CloseAlongWall's (map frame)
   std::vector<TimedPose> prior_trajectory_;  // Seed's (map frame)

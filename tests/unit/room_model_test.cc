@@ -297,6 +297,10 @@ TEST(RoomModelTest, AFreeObjectsSideFacingAWallTooNearToGoBetweenIsInferredOnceL
   Modeler next{ModelOptions{}};
   next.Seed(m.model(), a.trajectory);
   EXPECT_TRUE(next.Update(a.lines, {}).objects[0].complete);
+  EXPECT_EQ(next.model().objects[0].note, "the side facing the wall inferred (too near it to go between)");
+  // Many updates later: the note is not repeated.
+  for (int i = 0; i < 50; ++i) m.Update(more, a.trajectory);
+  EXPECT_EQ(m.model().objects[0].note, "the side facing the wall inferred (too near it to go between)");
 }
 
 TEST(RoomModelTest, NoSideFacingAWallIsInferredWhereTheRobotCouldGoBetween) {
