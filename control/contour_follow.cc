@@ -146,12 +146,14 @@ ContourFollow::Result ContourFollow::Step(double t, const slam::Slam& slam, cons
   }
   // A free object near a wall: the robot met the wall in the gap beside it and
   // follows the wall away. The side facing the wall, where it cannot go, may be
-  // inferred (once each time it leaves; otherwise it goes on, and may come round).
+  // inferred; or the one side not mapped, if the robot went past it before it
+  // left (once each time it leaves; otherwise it goes on, and may come round).
   const bool away =
       !at_wall_ && t - since_ > o.contour_leave_after_s && LeftTarget(modeler->model(), here);
   if (away && !away_) {
     away_ = true;
-    if (modeler->CloseNearWall(target_, slam.map_lines(), slam.map_trajectory())) {
+    if (modeler->CloseNearWall(target_, slam.map_lines(), slam.map_trajectory()) ||
+        modeler->CloseAlongWall(target_, trace_, slam.map_lines(), slam.map_trajectory())) {
       return {Status::kClosed, {}};
     }
   }

@@ -69,10 +69,11 @@ namespace {
 constexpr char kByContour[] = "one side inferred from the contour";
 constexpr char kAlongWall[] = "one side inferred from the contour along the wall";
 constexpr char kNearWall[] = "the side facing the wall inferred (too near it to go between)";
+constexpr char kWentPast[] = "one side inferred from the contour that went past it";
 
 // Which side inference a saved complete object's note names (nullptr: none).
 const char* SavedInference(const std::string& note) {
-  for (const char* why : {kAlongWall, kNearWall, kByContour}) {
+  for (const char* why : {kAlongWall, kNearWall, kWentPast, kByContour}) {
     if (note.find(why) != std::string::npos) return why;
   }
   return nullptr;
@@ -528,8 +529,9 @@ void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_l
         obj.lines.size() >= 2) {
       obj.complete = true;
       const char* why = known != inferred_.end() ? known->second
-                        : group_inferred[gi]     ? kAlongWall
-                                                 : kNearWall;
+                        : !group_inferred[gi]                ? kNearWall
+                        : obj.kind == ObjectKind::kFree      ? kWentPast
+                                                             : kAlongWall;
       if (known == inferred_.end()) inferred_.emplace_back(obj.id, why);
       if (why != nullptr) obj.note = obj.note.empty() ? why : obj.note + "; " + why;
     }
@@ -564,19 +566,22 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
     const auto& g = groups[gi];
     group_in_loop.push_back(
         std::any_of(g.begin(), g.end(), [&](size_t i) { return side_in_loop[i]; }));
-    // Its free sides followed along the wall: the one side left is where the robot went past.
     const ObjectModel& obj = m.objects[gi];
-    const int e = obj.kind == ObjectKind::kWallContact && !obj.complete && obj.lines.size() >= 2
+    // The one edge neither against a wall nor a face seen from outside, if
+    // that is all that is missing.
+    const int e = !obj.complete && obj.lines.size() >= (obj.kind == ObjectKind::kFree ? 3U : 2U)
                       ? MissingEdge(sides, g, obj.box, m.room, options_)
                       : -1;
+    // It is where the robot went past (a wall-contact object's free sides
+    // followed along the wall, or a free object's three sides followed on).
     group_inferred.push_back(e >= 0 && std::any_of(wall_traces_.begin(), wall_traces_.end(), [&](const auto& tr) {
                                return TracePassesEdge(tr, obj.box, e, options_.trace_band_m);
                              }));
     // A free object's one side not mapped faces a wall too near for the robot to go between.
-    const int f = obj.kind == ObjectKind::kFree && !obj.complete && obj.lines.size() >= 3 && options_.narrow_gap_m > 0
-                      ? MissingEdge(sides, g, obj.box, m.room, options_)
-                      : -1;
-    group_narrow.push_back(f >= 0 && std::abs(EdgeOffset(obj.box, f) - EdgeOffset(*m.room.box, f)) < options_.narrow_gap_m);
+    const double to_wall =
+        e >= 0 ? std::abs(EdgeOffset(obj.box, e) - EdgeOffset(*m.room.box, e)) : 0;
+    group_narrow.push_back(e >= 0 && obj.kind == ObjectKind::kFree && options_.narrow_gap_m > 0 &&
+                           to_wall < options_.narrow_gap_m);
   }
   AssignIds(&m, group_in_loop, group_inferred, group_narrow);
   std::sort(m.objects.begin(), m.objects.end(),

@@ -97,8 +97,10 @@ class Modeler {
   // its box is neither a mapped face nor against a wall, and the trace went
   // past it outside (within trace_band_m of its middle), that side is
   // inferred and the object counts as complete (noted) - the wall-contact
-  // counterpart of CloseByContour. Any later Update applies it too. False if
-  // still incomplete.
+  // counterpart of CloseByContour. The same for a free object with three
+  // sides mapped whose contour following went past its fourth and then left
+  // it (along a wall, or drawn off round the room: noted "... that went past
+  // it"). Any later Update applies it too. False if still incomplete.
   bool CloseAlongWall(int object_id, const std::vector<Eigen::Vector2d>& trace,
                       const std::vector<slam::LineFeature>& lines,
                       const std::vector<TimedPose>& trajectory);

@@ -336,6 +336,72 @@ TEST(RoomModelTest, NoSideFacingAWallIsInferredWhereTheRobotCouldGoBetween) {
   }
 }
 
+// A free box x 1.5..2.3, y 1.4..2.0 in the middle of the room, three sides
+// mapped (left, top, right; its bottom a short side never mapped), and the
+// robot's contour round it: up the left, over the top, down the right, and,
+// if `past_bottom`, back under the bottom before it is drawn off down to the
+// wall (it leaves before it has turned a full contour).
+AlongWall FreeBoxInTheRoom(bool past_bottom) {
+  AlongWall a;
+  a.lines = Room();
+  const double y0 = 1.4, y1 = 2.0;
+  a.lines.push_back(Line(6, 1.5, y0 + 0.02, 1.5, y1 - 0.02));
+  a.lines.push_back(Line(7, 1.52, y1, 2.28, y1));
+  a.lines.push_back(Line(8, 2.3, y1 - 0.02, 2.3, y0 + 0.02));
+  a.trajectory = Loop();
+  for (double y = y0; y <= y1 + 0.4; y += 0.1) a.trace.emplace_back(1.1, y);
+  for (double x = 1.1; x <= 2.7; x += 0.1) a.trace.emplace_back(x, y1 + 0.4);
+  if (past_bottom) {
+    for (double y = y1 + 0.4; y >= y0 - 0.4; y -= 0.1) a.trace.emplace_back(2.7, y);
+    for (double x = 2.7; x >= 1.1; x -= 0.1) a.trace.emplace_back(x, y0 - 0.4);
+    for (double y = y0 - 0.4; y >= 0.4; y -= 0.1) a.trace.emplace_back(1.1, y);
+  } else {
+    for (double y = y1 + 0.4; y >= y0; y -= 0.1) a.trace.emplace_back(2.7, y);
+    for (double x = 2.7; x <= 3.6; x += 0.1) a.trace.emplace_back(x, y0);  // off to the right wall
+  }
+  for (const auto& p : a.trace) a.trajectory.push_back({0, {p.x(), p.y(), 0}});
+  return a;
+}
+
+TEST(RoomModelTest, AFreeObjectsOneSideNotMappedIsInferredWhereItsContourWentPastIt) {
+  const AlongWall a = FreeBoxInTheRoom(true);
+  Modeler m{ModelOptions{}};
+  ASSERT_EQ(m.Update(a.lines, a.trajectory).objects.size(), 1u);
+  const int id = m.model().objects[0].id;
+  EXPECT_EQ(m.model().objects[0].kind, ObjectKind::kFree);
+  EXPECT_FALSE(m.model().objects[0].complete);
+  EXPECT_FALSE(m.CloseNearWall(id, a.lines, a.trajectory));  // 1.4 m from the wall: not that
+  EXPECT_TRUE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
+  const ObjectModel& o = m.model().objects[0];
+  EXPECT_EQ(o.id, id);
+  EXPECT_TRUE(o.complete);
+  EXPECT_EQ(o.kind, ObjectKind::kFree);
+  EXPECT_EQ(o.note, "one side inferred from the contour that went past it");
+  EXPECT_NEAR(o.box.ymin, 1.42, 1e-9);  // from its sides' ends
+  // Kept in a saved map, with its note.
+  Modeler next{ModelOptions{}};
+  next.Seed(m.model(), a.trajectory);
+  EXPECT_TRUE(next.Update(a.lines, {}).objects[0].complete);
+  EXPECT_EQ(next.model().objects[0].note, "one side inferred from the contour that went past it");
+}
+
+TEST(RoomModelTest, AFreeObjectsSideTheContourDidNotGoPastIsNotInferred) {
+  {  // It left down the right side, never under the box.
+    const AlongWall a = FreeBoxInTheRoom(false);
+    Modeler m{ModelOptions{}};
+    const int id = m.Update(a.lines, a.trajectory).objects[0].id;
+    EXPECT_FALSE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
+    EXPECT_FALSE(m.model().objects[0].complete);
+  }
+  {  // Two sides mapped: the trace went all round, but where the others are is not known.
+    AlongWall a = FreeBoxInTheRoom(true);
+    a.lines.pop_back();
+    Modeler m{ModelOptions{}};
+    const int id = m.Update(a.lines, a.trajectory).objects[0].id;
+    EXPECT_FALSE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
+  }
+}
+
 TEST(RoomModelTest, IncompleteObjectsWhoseBoxesTouchArePiecesOfOne) {
   // Compound furniture: a box 1.5..2.0 x 1.5..2.0 seen from below and the left,
   // and a lower one 2.0..2.6 x 1.5..1.8 beside it seen from the right and above;
