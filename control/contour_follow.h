@@ -23,7 +23,8 @@ struct ContourOptions {
   double contour_leave_m = 0.6;          // a wall-contact object's free sides have been followed
                                          // once the robot is this much farther than the follow
                                          // distance from it (it follows the wall away); a free
-                                         // object is then asked to be closed near the wall
+                                         // object is then asked to be closed near the wall, or
+                                         // where its contour went past its missing side
   double contour_leave_after_s = 5.0;    // ... checked only after following it this long
   double contour_turn_margin_rad = 0.3;  // all round: turned 2 pi plus this (clockwise)
   double contour_trace_step_m = 0.05;    // the followed contour is recorded at this spacing
@@ -58,7 +59,8 @@ class ContourFollow {
     kFollowing,
     kComplete,       // the model completed it from new lines
     kClosed,         // all round it, or along a wall-contact object's free sides, or a free
-                     // object left along a wall too near it: the model inferred the last side
+                     // object left along a wall too near it or after going past its missing
+                     // side: the model inferred the last side
     kIncomplete,     // all round it contour_loops times, still incomplete
     kFreeSidesDone,  // a wall-contact object's free sides followed, still incomplete
     kTimedOut,
@@ -96,7 +98,7 @@ class ContourFollow {
   double last_theta_ = 0;
   int loops_done_ = 0;
   int windows_seen_ = 0;
-  bool away_ = false;  // a free target: left along a wall (CloseNearWall asked)
+  bool away_ = false;  // a free target: left (CloseNearWall and CloseAlongWall asked)
   std::vector<Eigen::Vector2d> trace_;  // map frame: where contour following went
 };
 

@@ -46,8 +46,8 @@ options::Table<ModelOptions> ModelKeys() {
       {"merge_touching_m", &O::merge_touching_m, 0, 1, "m",
        "incomplete objects whose boxes are this close are pieces of one (0: off)"},
       {"trace_band_m", &O::trace_band_m, 0.05, 3, "m",
-       "a wall-contact object's contour along the wall this close to the middle of an edge of its box, outside "
-       "it, went past that side (its last side is inferred)"},
+       "a wall-contact object's contour along the wall (a free object's own contour, beside the edge) this close "
+       "to the middle of an edge of its box, outside it, went past that side (its last side is inferred)"},
       {"narrow_gap_m", &O::narrow_gap_m, 0, 3, "m",
        "a free object's one unmapped side facing a wall closer than this is inferred once its contour has left "
        "it along that wall (the robot cannot go between; 0: off)"},
@@ -92,7 +92,16 @@ bool Modeler::CloseByContour(int object_id, const std::vector<Eigen::Vector2d>& 
 bool Modeler::CloseAlongWall(int object_id, const std::vector<Eigen::Vector2d>& trace,
                              const std::vector<slam::LineFeature>& lines,
                              const std::vector<TimedPose>& trajectory) {
-  if (!trace.empty()) wall_traces_.push_back(trace);
+  if (!trace.empty()) {
+    // The same contour left again (a free target's trace grows while it is
+    // followed): its longer trace replaces the last.
+    if (!wall_traces_.empty() && wall_traces_.back().first == object_id &&
+        wall_traces_.back().second.front() == trace.front()) {
+      wall_traces_.back().second = trace;
+    } else {
+      wall_traces_.emplace_back(object_id, trace);
+    }
+  }
   return CompleteAfterUpdate(object_id, lines, trajectory);
 }
 
@@ -122,6 +131,9 @@ void Modeler::NoteMoved(int id, const Box& was) {
   inferred_.erase(std::remove_if(inferred_.begin(), inferred_.end(), [&](const auto& i) { return i.first == id; }),
                   inferred_.end());
   left_near_wall_.erase(std::remove(left_near_wall_.begin(), left_near_wall_.end(), id), left_near_wall_.end());
+  wall_traces_.erase(
+      std::remove_if(wall_traces_.begin(), wall_traces_.end(), [&](const auto& w) { return w.first == id; }),
+      wall_traces_.end());
   given_up_.erase(std::remove_if(given_up_.begin(), given_up_.end(), [&](const auto& g) { return g.first == id; }),
                   given_up_.end());
   model_.objects.erase(std::remove_if(model_.objects.begin(), model_.objects.end(),
@@ -374,7 +386,11 @@ int MissingEdge(const std::vector<Side>& sides, const std::vector<size_t>& g, co
 // band_m of its middle. (Not over the edge itself: beside a short side that
 // meets a wall the robot keeps its follow distance from the wall too, and
 // passes its corner rather than its middle.)
-bool TracePassesEdge(const std::vector<Eigen::Vector2d>& trace, const Box& b, int e, double band_m) {
+// With `within_span`, the point is also beside the edge (a free object's: a
+// trace down a neighbouring side past its end would pass a short edge's middle
+// within the band).
+bool TracePassesEdge(const std::vector<Eigen::Vector2d>& trace, const Box& b, int e, double band_m,
+                     bool within_span) {
   const bool horizontal = e % 2 == 0;
   const double at = EdgeOffset(b, e);
   const double outward = EdgeOutward(e);
@@ -382,7 +398,9 @@ bool TracePassesEdge(const std::vector<Eigen::Vector2d>& trace, const Box& b, in
                                          : Eigen::Vector2d(at, 0.5 * (b.ymin + b.ymax));
   return std::any_of(trace.begin(), trace.end(), [&](const Eigen::Vector2d& p) {
     const double off = outward * ((horizontal ? p.y() : p.x()) - at);
-    return off > 0 && (p - mid).norm() < band_m;
+    const double along = horizontal ? p.x() : p.y();
+    const bool beside = horizontal ? along >= b.xmin && along <= b.xmax : along >= b.ymin && along <= b.ymax;
+    return off > 0 && (p - mid).norm() < band_m && (beside || !within_span);
   });
 }
 
@@ -475,6 +493,9 @@ void Modeler::RenameNewAsMoved(ObjectModel* obj) {
     if (i.first == was) i.first = obj->id;
   }
   std::replace(left_near_wall_.begin(), left_near_wall_.end(), was, obj->id);
+  for (auto& w : wall_traces_) {
+    if (w.first == was) w.first = obj->id;
+  }
   for (auto& g : given_up_) {
     if (g.first == was) g.first = obj->id;
   }
@@ -482,7 +503,8 @@ void Modeler::RenameNewAsMoved(ObjectModel* obj) {
 }
 
 void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop,
-                        const std::vector<bool>& group_inferred, const std::vector<bool>& group_narrow) {
+                        const std::vector<std::vector<int>>& passed_by,
+                        const std::vector<bool>& group_narrow) {
   // Stable ids: an object keeps the id of the previous object it overlaps most.
   std::vector<bool> taken(model_.objects.size(), false);
   for (size_t gi = 0; gi < m->objects.size(); ++gi) {
@@ -519,17 +541,23 @@ void Modeler::AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_l
       // (After a note saying where it came from: "moved ..." stays first.)
       obj.note = obj.note.empty() ? kByContour : obj.note + "; " + kByContour;
     }
-    // Inferred along or near a wall, now or earlier (or complete in a saved map).
+    // Inferred along or near a wall, now or earlier (or complete in a saved map):
+    // a wall-contact object's side by any contour along the wall that went
+    // past it, a free object's only by its own.
+    const std::vector<int>& by = passed_by[gi];
+    const bool passed = obj.kind == ObjectKind::kFree
+                            ? std::find(by.begin(), by.end(), obj.id) != by.end()
+                            : !by.empty();
     const auto known = std::find_if(inferred_.begin(), inferred_.end(),
                                     [&](const auto& i) { return i.first == obj.id; });
     const bool near_wall =
         group_narrow[gi] &&
         std::find(left_near_wall_.begin(), left_near_wall_.end(), obj.id) != left_near_wall_.end();
-    if ((known != inferred_.end() || group_inferred[gi] || near_wall) && !obj.complete &&
+    if ((known != inferred_.end() || passed || near_wall) && !obj.complete &&
         obj.lines.size() >= 2) {
       obj.complete = true;
       const char* why = known != inferred_.end() ? known->second
-                        : !group_inferred[gi]                ? kNearWall
+                        : !passed                            ? kNearWall
                         : obj.kind == ObjectKind::kFree      ? kWentPast
                                                              : kAlongWall;
       if (known == inferred_.end()) inferred_.emplace_back(obj.id, why);
@@ -561,7 +589,8 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
   std::vector<bool> side_in_loop;
   auto groups = GroupObjects(sides, is_wall, contour_loops_, options_, &side_in_loop);
   MergeTouching(sides, side_in_loop, m.room, options_, &groups, &m.objects);
-  std::vector<bool> group_in_loop, group_inferred, group_narrow;
+  std::vector<bool> group_in_loop, group_narrow;
+  std::vector<std::vector<int>> passed_by;
   for (size_t gi = 0; gi < groups.size(); ++gi) {
     const auto& g = groups[gi];
     group_in_loop.push_back(
@@ -573,17 +602,22 @@ const EnvironmentModel& Modeler::Update(const std::vector<slam::LineFeature>& li
                       ? MissingEdge(sides, g, obj.box, m.room, options_)
                       : -1;
     // It is where the robot went past (a wall-contact object's free sides
-    // followed along the wall, or a free object's three sides followed on).
-    group_inferred.push_back(e >= 0 && std::any_of(wall_traces_.begin(), wall_traces_.end(), [&](const auto& tr) {
-                               return TracePassesEdge(tr, obj.box, e, options_.trace_band_m);
-                             }));
+    // followed along the wall, or a free object's three sides followed on):
+    // which targets' traces did.
+    std::vector<int> by;
+    for (const auto& [id, tr] : wall_traces_) {
+      if (e >= 0 && TracePassesEdge(tr, obj.box, e, options_.trace_band_m, obj.kind == ObjectKind::kFree)) {
+        by.push_back(id);
+      }
+    }
+    passed_by.push_back(std::move(by));
     // A free object's one side not mapped faces a wall too near for the robot to go between.
     const double to_wall =
         e >= 0 ? std::abs(EdgeOffset(obj.box, e) - EdgeOffset(*m.room.box, e)) : 0;
     group_narrow.push_back(e >= 0 && obj.kind == ObjectKind::kFree && options_.narrow_gap_m > 0 &&
                            to_wall < options_.narrow_gap_m);
   }
-  AssignIds(&m, group_in_loop, group_inferred, group_narrow);
+  AssignIds(&m, group_in_loop, passed_by, group_narrow);
   std::sort(m.objects.begin(), m.objects.end(),
             [](const auto& a, const auto& b) { return a.id < b.id; });
   model_ = std::move(m);

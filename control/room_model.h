@@ -32,8 +32,9 @@ struct ModelOptions {
   double merge_touching_m = 0.20;    // incomplete objects whose boxes are this close are pieces
                                      // of one (compound furniture whose step was not mapped, a
                                      // piece's sides that no corner joined; 0: off)
-  double trace_band_m = 0.6;         // a contour along the wall this close to the middle of a
-                                     // box edge, outside it, went past that side
+  double trace_band_m = 0.6;         // a contour along the wall (a free object's own, beside
+                                     // the edge) this close to the middle of a box edge,
+                                     // outside it, went past that side
   double narrow_gap_m = 0.9;         // a free object's one unmapped side facing a wall closer
                                      // than this is inferred once its contour has left it along
                                      // that wall: the robot, keeping the follow distance (0.40 m)
@@ -135,8 +136,11 @@ class Modeler {
  private:
   // Gives the new model's objects the ids of the old ones they overlap most (new
   // ids otherwise), and applies closed contours and given-up notes.
+  // `passed_by`: per group, the ids of the targets whose CloseAlongWall trace
+  // went past its one missing edge.
   void AssignIds(EnvironmentModel* m, const std::vector<bool>& group_in_loop,
-                 const std::vector<bool>& group_inferred, const std::vector<bool>& group_narrow);
+                 const std::vector<std::vector<int>>& passed_by,
+                 const std::vector<bool>& group_narrow);
   // Updates the model; whether object `object_id` is in it complete.
   bool CompleteAfterUpdate(int object_id, const std::vector<slam::LineFeature>& lines,
                            const std::vector<TimedPose>& trajectory);
@@ -152,12 +156,14 @@ class Modeler {
   int next_id_ = 1;
   std::vector<std::pair<int, std::string>> given_up_;
   std::vector<int> closed_by_contour_;
-  // Objects whose side was inferred along or near a wall, or complete in a saved
-  // map: each id once, with the note's inference (nullptr: none).
+  // Objects whose side was inferred along or near a wall or where their contour
+  // went past it, or complete in a saved map: each id once, with the note's
+  // inference (nullptr: none).
   std::vector<std::pair<int, const char*>> inferred_;
   std::vector<int> left_near_wall_;  // ids CloseNearWall was told of
   std::vector<std::vector<Eigen::Vector2d>> contour_loops_;  // map frame
-  std::vector<std::vector<Eigen::Vector2d>> wall_traces_;    // CloseAlongWall's (map frame)
+  // CloseAlongWall's: the target's id and its trace (map frame).
+  std::vector<std::pair<int, std::vector<Eigen::Vector2d>>> wall_traces_;
   std::vector<TimedPose> prior_trajectory_;  // Seed's (map frame)
   bool seeded_ = false;
   std::vector<int> saved_ids_;                     // Seed's objects

@@ -341,23 +341,26 @@ TEST(RoomModelTest, NoSideFacingAWallIsInferredWhereTheRobotCouldGoBetween) {
 // robot's contour round it: up the left, over the top, down the right, and,
 // if `past_bottom`, back under the bottom before it is drawn off down to the
 // wall (it leaves before it has turned a full contour).
-AlongWall FreeBoxInTheRoom(bool past_bottom) {
+// (`x1`: its right side; the contour keeps 0.4 m off.)
+AlongWall FreeBoxInTheRoom(bool past_bottom, double x1 = 2.3) {
   AlongWall a;
   a.lines = Room();
   const double y0 = 1.4, y1 = 2.0;
   a.lines.push_back(Line(6, 1.5, y0 + 0.02, 1.5, y1 - 0.02));
-  a.lines.push_back(Line(7, 1.52, y1, 2.28, y1));
-  a.lines.push_back(Line(8, 2.3, y1 - 0.02, 2.3, y0 + 0.02));
+  a.lines.push_back(Line(7, 1.52, y1, x1 - 0.02, y1));
+  a.lines.push_back(Line(8, x1, y1 - 0.02, x1, y0 + 0.02));
   a.trajectory = Loop();
+  const double right = x1 + 0.4;
   for (double y = y0; y <= y1 + 0.4; y += 0.1) a.trace.emplace_back(1.1, y);
-  for (double x = 1.1; x <= 2.7; x += 0.1) a.trace.emplace_back(x, y1 + 0.4);
+  for (double x = 1.1; x <= right; x += 0.1) a.trace.emplace_back(x, y1 + 0.4);
   if (past_bottom) {
-    for (double y = y1 + 0.4; y >= y0 - 0.4; y -= 0.1) a.trace.emplace_back(2.7, y);
-    for (double x = 2.7; x >= 1.1; x -= 0.1) a.trace.emplace_back(x, y0 - 0.4);
+    for (double y = y1 + 0.4; y >= y0 - 0.4; y -= 0.1) a.trace.emplace_back(right, y);
+    for (double x = right; x >= 1.1; x -= 0.1) a.trace.emplace_back(x, y0 - 0.4);
     for (double y = y0 - 0.4; y >= 0.4; y -= 0.1) a.trace.emplace_back(1.1, y);
   } else {
-    for (double y = y1 + 0.4; y >= y0; y -= 0.1) a.trace.emplace_back(2.7, y);
-    for (double x = 2.7; x <= 3.6; x += 0.1) a.trace.emplace_back(x, y0);  // off to the right wall
+    // Down the right side past its end, and off to the right wall.
+    for (double y = y1 + 0.4; y >= y0 - 0.4; y -= 0.1) a.trace.emplace_back(right, y);
+    for (double x = right; x <= 3.6; x += 0.1) a.trace.emplace_back(x, y0 - 0.4);
   }
   for (const auto& p : a.trace) a.trajectory.push_back({0, {p.x(), p.y(), 0}});
   return a;
@@ -393,12 +396,28 @@ TEST(RoomModelTest, AFreeObjectsSideTheContourDidNotGoPastIsNotInferred) {
     EXPECT_FALSE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
     EXPECT_FALSE(m.model().objects[0].complete);
   }
+  {  // A narrow box (0.3 m): down its right side, past the end, is within the band of
+     // its bottom's middle, but not beside it.
+    const AlongWall a = FreeBoxInTheRoom(false, 1.8);
+    Modeler m{ModelOptions{}};
+    ASSERT_EQ(m.Update(a.lines, a.trajectory).objects.size(), 1u);
+    const int id = m.model().objects[0].id;
+    EXPECT_FALSE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
+  }
   {  // Two sides mapped: the trace went all round, but where the others are is not known.
     AlongWall a = FreeBoxInTheRoom(true);
     a.lines.pop_back();
     Modeler m{ModelOptions{}};
     const int id = m.Update(a.lines, a.trajectory).objects[0].id;
     EXPECT_FALSE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));
+  }
+  {  // Another target's contour went past it: not its own.
+    const AlongWall a = FreeBoxInTheRoom(true);
+    Modeler m{ModelOptions{}};
+    const int id = m.Update(a.lines, a.trajectory).objects[0].id;
+    EXPECT_FALSE(m.CloseAlongWall(id + 1, a.trace, a.lines, a.trajectory));
+    EXPECT_FALSE(m.model().objects[0].complete);
+    EXPECT_TRUE(m.CloseAlongWall(id, a.trace, a.lines, a.trajectory));  // its own: yes
   }
 }
 
