@@ -117,6 +117,34 @@ TEST(CampaignMechanismTest, AFreePiecesSideFacingANearWallIsInferred) {
   EXPECT_LT(with_s, without_s - 300);
 }
 
+// Generated nominal rooms where a free piece's contour is drawn off before it
+// closes (docs/error-budget.md, "A free piece's side the contour went past
+// inferred"): the robot goes round three sides and past the fourth, meets a
+// wall or another piece and follows it away. Contour following, leaving the
+// piece, asks the model to infer the side its own trace went past
+// (ContourFollow::Step, Modeler::CloseAlongWall); without that the piece stays
+// incomplete until the contour times out.
+TEST(CampaignMechanismTest, AFreePiecesSideItsContourWentPastIsInferred) {
+  const std::vector<uint64_t> seeds = {26, 49, 58, 107, 120};
+  const robot::CoreOptions o = robot::DefaultCoreOptions();
+  int inferred = 0;
+  for (const uint64_t seed : seeds) {
+    const sim::World world = sim::GenerateWorld(seed, sim::NoiseProfile::kNominal);
+    const sim::InProcessRun run = sim::RunInProcess(world, o, seed, o.mission.max_time_s);
+    EXPECT_EQ(run.core->state(), control::MissionState::kDone) << seed;
+    for (const auto& obj : run.core->Map().objects) {
+      if (obj.note.find("one side inferred from the contour that went past it") == std::string::npos) continue;
+      std::printf("nominal/%llu: object %d [%.2f %.2f %.2f %.2f] %s\n", static_cast<unsigned long long>(seed),
+                  obj.id, obj.box.xmin, obj.box.ymin, obj.box.xmax, obj.box.ymax, obj.note.c_str());
+      EXPECT_TRUE(obj.complete) << seed;
+      EXPECT_EQ(obj.kind, control::ObjectKind::kFree) << seed;
+      ++inferred;
+    }
+  }
+  // Measured 2026-12-07: one such piece in each of the five rooms.
+  EXPECT_GE(inferred, 4);
+}
+
 // slam.association.associate_in_robot_frame (docs/error-budget.md): generated
 // realistic room 11 with only its correlated slip (every other effect nominal).
 // Followed along its walls, the robot's heading drifts by several degrees per
