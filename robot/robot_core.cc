@@ -12,13 +12,6 @@ CoreOptions DefaultCoreOptions() {
     const double a = deg[i] * M_PI / 180.0;
     o.slam.mounts[i] = {0.05 * std::cos(a), 0.05 * std::sin(a), a};
   }
-  // The odometry self-calibration is off in the shipped configuration for now:
-  // with it on, three paper-world mission tests change outcome (mission_test
-  // fig19 seed 2 misses a piece; mission_run_test seed 2's contour following
-  // times out; FaultRunTest's loop no longer misses the box it is built around)
-  // although the campaign's rates improve (docs/robustness.md). Turn it on with
-  // slam.calibration.enabled = true.
-  o.slam.calibration.enabled = false;
   return o;
 }
 

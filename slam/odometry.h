@@ -21,10 +21,15 @@
 
 namespace irslam::slam {
 
+// The random part of the odometry's error; its systematic part (wheel radii,
+// track width) is estimated in the EKF (CalibrationOptions). A quarter of the
+// values used before 2026-12-07 (4e-4, 1e-3, 2e-4): with those, a wall line's
+// noisy angle turned the heading by 1-2 degrees at a time and the map as a whole
+// with it (docs/error-budget.md, "Trusting the odometry more").
 struct MotionNoise {
-  double var_per_m = 4e-4;          // m^2 of position variance per metre travelled
-  double var_theta_per_rad = 1e-3;  // rad^2 of heading variance per radian turned
-  double var_theta_per_m = 2e-4;    // rad^2 of heading variance per metre travelled
+  double var_per_m = 1e-4;            // m^2 of position variance per metre travelled
+  double var_theta_per_rad = 2.5e-4;  // rad^2 of heading variance per radian turned
+  double var_theta_per_m = 5e-5;      // rad^2 of heading variance per metre travelled
   // > 0: the three variances are multiplied by the running mean, over this many
   // matches, of the matches' normalised innovation squared over its 2 degrees
   // of freedom, clamped to 1 .. adapt_max_scale (covariance matching: A. H.

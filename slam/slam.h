@@ -78,7 +78,12 @@ struct AssociationOptions {
   double collinear_sigma_m = 1e-3;
   double collinear_max_m = 0.04;        // a collinear piece is tied (eq. 12) only within this offset
   double collinear_min_length_m = 1.0;  // ... and only to a mapped line at least this long
-  double measurement_cov_scale = 1.0; // multiplies the eq. (7) covariance
+  // Multiplies the eq. (7) covariance. 4 since 2026-12-07 (was 1): with the
+  // motion noise a quarter of before (MotionNoise), the odometry's noise is a
+  // sixteenth of the lines' relative to before (docs/error-budget.md, "Trusting
+  // the odometry more"); the Hough scatter itself is, if anything, larger than
+  // the lines' true error there.
+  double measurement_cov_scale = 4.0;
   double max_mahalanobis2 = 13.8;     // innovation gate of a match (chi2, 2 dof, 99.9 %)
   // After this many gate rejections in a row (0: never), the next match the gate
   // rejects is used with its noise inflated to sit on the gate: the filter cannot

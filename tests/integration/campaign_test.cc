@@ -9,6 +9,7 @@
 
 #include "robot/robot_core.h"
 #include "sim/sim_run.h"
+#include "tests/testing/slam_noise.h"
 #include "tests/tools/campaign.h"
 #include "tests/tools/metrics.h"
 
@@ -25,11 +26,10 @@ class CampaignSubsetTest : public ::testing::TestWithParam<Floor> {};
 
 TEST_P(CampaignSubsetTest, RatesDoNotDropBelowTodays) {
   const Floor f = GetParam();
-  // Seeds 1-12 of each profile, both cores.
-  // With the odometry self-calibration on (off in the shipped configuration for
-  // now: robot/robot_core.cc DefaultCoreOptions); the floors were measured so.
-  robot::CoreOptions options = robot::DefaultCoreOptions();
-  options.slam.calibration.enabled = true;
+  // Seeds 1-12 of each profile, both cores, the shipped options (the odometry
+  // self-calibration on: before 2026-12-07 it was set here, off in the shipped
+  // options).
+  const robot::CoreOptions options = robot::DefaultCoreOptions();
   const auto runs = RunCampaign(f.profile, 1, 12, options, 2);
   const Rates r = Summarise(runs);
   EXPECT_EQ(r.runs, 12);
@@ -79,9 +79,15 @@ INSTANTIATE_TEST_SUITE_P(Profiles, CampaignSubsetTest,
                          // complete 0.710. Over 100 worlds with the calibration on:
                          // complete 55.8 -> 63.8 %, pose ok 35 -> 32 %, lost 15 % both; with it off (the
                          // shipped options, seeds 1-400) pose ok 107 -> 107 and 120 -> 119 of 200.
+                         // 2026-12-07, the SLAM trusts the odometry more (calibration on, eq. (7) x 4,
+                         // motion noise x 0.25: docs/error-budget.md): nominal 12/12, 0.903, 11/12,
+                         // 0/12, complete 0.774; realistic 11/12, 0.129, 1/12, 11/12, ratio 1/12 (these
+                         // 12 lose pieces; over 200 realistic worlds pieces good 24.5 -> 27.0 %, ratio
+                         // within 0.1 % 17.0 %, 9.5 % with it off: docs/robustness.md); harsh 4/12, 0, 0,
+                         // 12/12.
                          // Raise these as the robustness work lands.
-                         ::testing::Values(Floor{sim::NoiseProfile::kNominal, 12 / 12.0, 0.80, 4 / 12.0, 1 / 12.0, 12 / 12.0},
-                                           Floor{sim::NoiseProfile::kRealistic, 9 / 12.0, 0.22, 0.0, 1.0, 2 / 12.0},
+                         ::testing::Values(Floor{sim::NoiseProfile::kNominal, 12 / 12.0, 0.88, 10 / 12.0, 1 / 12.0, 12 / 12.0},
+                                           Floor{sim::NoiseProfile::kRealistic, 10 / 12.0, 0.12, 0.0, 1.0, 1 / 12.0},
                                            Floor{sim::NoiseProfile::kHarsh, 4 / 12.0, 0.0, 0.0, 1.0, 1 / 12.0}),
                          [](const ::testing::TestParamInfo<Floor>& p) { return std::string(sim::ToString(p.param.profile)); });
 
@@ -125,7 +131,10 @@ TEST(CampaignMechanismTest, AFreePiecesSideFacingANearWallIsInferred) {
 // (ContourFollow::Step, Modeler::CloseAlongWall); without that the piece stays
 // incomplete until the contour times out.
 TEST(CampaignMechanismTest, AFreePiecesSideItsContourWentPastIsInferred) {
-  const std::vector<uint64_t> seeds = {26, 49, 58, 107, 120};
+  // Found by running seeds 1-125 with --map-out (2026-12-07, the SLAM trusting
+  // the odometry more; 26, 49 and 58 of the first set no longer leave such a
+  // piece, 102 leaves one against a wall).
+  const std::vector<uint64_t> seeds = {33, 52, 65, 107, 120};
   const robot::CoreOptions o = robot::DefaultCoreOptions();
   int inferred = 0;
   for (const uint64_t seed : seeds) {
@@ -141,7 +150,7 @@ TEST(CampaignMechanismTest, AFreePiecesSideItsContourWentPastIsInferred) {
       ++inferred;
     }
   }
-  // Measured 2026-12-07: one such piece in each of the five rooms.
+  // Measured 2026-12-07: one such piece in each of the five rooms (both sets).
   EXPECT_GE(inferred, 4);
 }
 
@@ -187,6 +196,9 @@ TEST(AssociationFrameTest, TheFollowedWallKeepsMatchingInTheRobotFrameAfterSlip)
 TEST(RoomFrameErrorTest, AMapTurnedAsAWholeIsNotLostInTheRoomsFrameABentOneIs) {
   robot::CoreOptions options = robot::DefaultCoreOptions();
   options.slam.extraction.max_uncertainty = 4.5;
+  // And the SLAM's noise then (before 2026-12-07): with today's, room 132's map
+  // is not turned (16 cm at most in either frame) and 49's is not bent.
+  testing::UseSlamNoiseBefore20261207(&options.slam);
   const RunScore turned = RunAndScore(132, sim::NoiseProfile::kNominal, options, options.mission.max_time_s);
   EXPECT_GT(turned.max_position_m, 0.20);
   EXPECT_LT(turned.room_max_position_m, 0.08);

@@ -9,6 +9,7 @@
 #include "robot/robot_core.h"
 #include "sim/generator.h"
 #include "sim/sim_run.h"
+#include "tests/testing/slam_noise.h"
 #include "tests/testing/worlds.h"
 #include "tests/tools/metrics.h"
 
@@ -182,6 +183,7 @@ TEST(FaultRunTest, ABoxTheWallFollowingLoopMissedIsFoundByALaterSurvey) {
   const sim::World world = testing::LoadTestWorld("fig14");
   robot::CoreOptions options = robot::DefaultCoreOptions();
   options.slam.extraction.max_uncertainty = 4.5;
+  testing::UseSlamNoiseBefore20261207(&options.slam);  // (and the SLAM's noise before 2026-12-07)
   sim::InProcessRun run = sim::RunInProcess(world, options, 4, 900, nullptr, &*faults);
   EXPECT_EQ(run.core->state(), control::MissionState::kDone);
   const auto sc = metrics::ScoreObjects(ToJson(run.core->Map()), run.core->slam(), world, 0);

@@ -480,6 +480,7 @@ TEST(SlamMapTest, MahalanobisFallbackMatchesAWallTheHeadingErrorTookBeyondEq13) 
   // the heading is corrected to nearly the 0.2 rad the observation says.
   auto run = [](double fallback) {
     SlamOptions o = TestOptions();
+    o.association.measurement_cov_scale = 1;  // the observation's covariance as given (the numbers above)
     o.resume.pose_sigma_rad = 0.1;
     o.association.fallback_mahalanobis2 = fallback;
     Slam slam(o);
@@ -560,6 +561,7 @@ TEST(SlamMapTest, AdaptedMotionNoiseFollowsTheInnovationsItIsShown) {
   // near 9 (scale ~4.5); scattered +-5 mm they give ~0.25 and the scale stays 1.
   auto scale_after = [](double scatter_m) {
     SlamOptions o = TestOptions();
+    o.association.measurement_cov_scale = 1;  // the claimed sigma as given
     o.motion_noise.adapt_window = 10;
     o.motion_noise.adapt_max_scale = 16;
     o.resume.pose_sigma_m = 0.001;
