@@ -31,7 +31,9 @@ struct CleaningOptions {
   double cleaning_width_m = 0.34;  // floor width cleaned in one pass (the body's diameter)
   double overlap_m = 0.04;         // neighbouring lanes overlap by this
   double clearance_m = 0.05;       // lanes keep the robot radius plus this from walls and furniture
-  double edge_clearance_m = 0.05;  // the edge pass keeps the robot radius plus this (< clearance_m: closer than the lanes)
+  // The edge pass keeps the robot radius plus this (< clearance_m: closer than the lanes;
+  // docs/cleaning.md, "The edge pass 2 cm from the walls").
+  double edge_clearance_m = 0.02;
   double bump_block_m = 0.05;      // a remembered contact blocks the robot radius plus this round it
   int max_bump_obstacles = 40;     // at most this many contacts (the latest) go into the plan
   double min_interval_m = 0.005;   // free intervals and overlaps narrower than this do not count
