@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -287,6 +288,16 @@ int main(int argc, char** argv) {
     std::string error;
     if (!LoadCoreConfigFile(config_path, &defaults, &error)) {
       std::fprintf(stderr, "irslam-report: %s\n", error.c_str());
+      return 2;
+    }
+  }
+  // The reports go to out_dir, made now: not after a campaign of minutes that
+  // then has nowhere to write.
+  {
+    std::error_code ec;
+    std::filesystem::create_directories(out_dir, ec);
+    if (ec) {
+      std::fprintf(stderr, "irslam-report: --out %s: %s\n", out_dir.c_str(), ec.message().c_str());
       return 2;
     }
   }
