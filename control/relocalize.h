@@ -86,6 +86,11 @@ struct SavedLines {
   std::vector<TimedPose> trajectory;
 };
 
+// `checkpoint` with every line that `committed` has too (same id, no saved
+// line merged into it since) as it was in `committed`: geometry and covariance
+// (MapAgreement::checkpoint).
+SavedLines WithCommittedLines(SavedLines checkpoint, const SavedLines& committed);
+
 class Relocalize {
  public:
   explicit Relocalize(RelocalizeOptions options) : options_(options) {}
@@ -145,7 +150,14 @@ class MapAgreement {
   // the map: no longer judged, and a probation on it ends (nothing reported).
   void Forget(int object_id);
   // The map as it was check_windows windows ago (map frame), to relocalise in.
-  const SavedLines& checkpoint() const { return checkpoints_.front(); }
+  // The map to relocalise in again: as it was check_windows windows ago, but
+  // every line of the map this mission began with (or last committed in) as it
+  // was then. A kidnap is found only after windows of mapping from the wrong
+  // pose; a saved line extended or moved by those (fig14 kidnap run 46: a 0.6 m
+  // side stretched to 2.3 m) would otherwise stay in the map relocalised in,
+  // and the rays that find nothing along its false part report its object
+  // moved (docs/relocalization.md, "The edge pass at 2 cm and the kidnap runs").
+  SavedLines checkpoint() const;
   // Matched share over the judged windows (1 while too few lines).
   double agreement() const { return agreement_; }
   // Share of the recent judged IR rays agreeing with the map (1 while too few).
@@ -193,6 +205,7 @@ class MapAgreement {
   slam::SlamStats last_;
   std::deque<Window> windows_;
   std::deque<SavedLines> checkpoints_;
+  SavedLines committed_;  // the map at Reset (the commit)
   double agreement_ = 1;
 };
 

@@ -501,9 +501,10 @@ TEST(RelocTest, KidnappedWhileCleaningRelocalisesAgainWithoutCorruptingTheMap) {
   // give up, and waits idle where the kidnap put it). Since escapes face away
   // from the contact, not from a wall behind (2026-12-05): 48 of 48, every run
   // detected and back within 10 cm, and 7 of these seven. Since the edge pass at
-  // 2 cm (2026-12-07): 48 of 48 recovered, but run 46 reports object 1 moved and
-  // its lines leave the map (seeds 40-135: one corrupted of 96 with the edge pass
-  // at 5 cm too, run 52; docs/relocalization.md); 7 of these seven.
+  // 2 cm (2026-12-07): 48 of 48 recovered, but run 46 reported object 1 moved and
+  // its lines left the map (seeds 40-135: one corrupted of 96 with the edge pass
+  // at 5 cm too, run 52); since saved lines go back to the commit when
+  // relocalising again, 0 of 96 (docs/relocalization.md); 7 of these seven.
   if (std::getenv("RELOC_KIDNAP_RUNS") || std::getenv("RELOC_KIDNAP_RUN")) return;
   EXPECT_GE(c.detected, 6);
   EXPECT_GE(c.recovered, 6);
