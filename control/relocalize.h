@@ -149,8 +149,7 @@ class MapAgreement {
   // Object `id` was found moved otherwise (map_changes.h) and its sides left
   // the map: no longer judged, and a probation on it ends (nothing reported).
   void Forget(int object_id);
-  // The map as it was check_windows windows ago (map frame), to relocalise in.
-  // The map to relocalise in again: as it was check_windows windows ago, but
+  // The map to relocalise in again (map frame): as it was check_windows windows ago, but
   // every line of the map this mission began with (or last committed in) as it
   // was then. A kidnap is found only after windows of mapping from the wrong
   // pose; a saved line extended or moved by those (fig14 kidnap run 46: a 0.6 m
