@@ -75,17 +75,17 @@ void MapAgreement::Reset(const slam::Slam& slam, const EnvironmentModel& model, 
   windows_.clear();
   checkpoints_.clear();
   checkpoints_.push_back({slam.map_lines(), slam.map_trajectory()});
-  committed_ = checkpoints_.front();
+  committed_ = checkpoints_.front().lines;
   agreement_ = 1;
 }
 
-SavedLines WithCommittedLines(SavedLines checkpoint, const SavedLines& committed) {
+SavedLines WithCommittedLines(SavedLines checkpoint, const std::vector<slam::LineFeature>& committed) {
   for (auto& l : checkpoint.lines) {
-    const auto c = std::find_if(committed.lines.begin(), committed.lines.end(),
+    const auto c = std::find_if(committed.begin(), committed.end(),
                                 [&](const slam::LineFeature& x) { return x.id == l.id; });
     // Not a line that took other saved lines in since (their ids are kept in
     // its `merged`, and the wall it became is theirs too).
-    if (c == committed.lines.end() || c->merged != l.merged) continue;
+    if (c == committed.end() || c->merged != l.merged) continue;
     l.rho = c->rho;
     l.theta = c->theta;
     l.cov = c->cov;

@@ -86,10 +86,10 @@ struct SavedLines {
   std::vector<TimedPose> trajectory;
 };
 
-// `checkpoint` with every line that `committed` has too (same id, no saved
-// line merged into it since) as it was in `committed`: geometry and covariance
-// (MapAgreement::checkpoint).
-SavedLines WithCommittedLines(SavedLines checkpoint, const SavedLines& committed);
+// `checkpoint` with every line that `committed` (the map's lines at the
+// commit) has too (same id, no saved line merged into it since) as it was in
+// `committed`: geometry and covariance (MapAgreement::checkpoint).
+SavedLines WithCommittedLines(SavedLines checkpoint, const std::vector<slam::LineFeature>& committed);
 
 class Relocalize {
  public:
@@ -204,7 +204,7 @@ class MapAgreement {
   slam::SlamStats last_;
   std::deque<Window> windows_;
   std::deque<SavedLines> checkpoints_;
-  SavedLines committed_;  // the map at Reset (the commit)
+  std::vector<slam::LineFeature> committed_;  // the map's lines at Reset (the commit)
   double agreement_ = 1;
 };
 

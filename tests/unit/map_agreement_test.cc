@@ -230,9 +230,9 @@ TEST_F(ContradictedLineTest, ASavedWallFoundNowhereIsNeverContradicted) {
 // sides left the map. Lines of the mission's own stay as they were; a saved
 // line that took another saved line in since keeps its merged geometry.
 TEST(WithCommittedLinesTest, SavedLinesGoBackToTheCommitOwnAndMergedOnesStay) {
-  SavedLines committed;
-  committed.lines = {Line(1, -5, -0.5, 5, -0.5), Line(2, 2, 3.5, 4, 3.5), Line(3, 6, -0.5, 9, -0.5)};
-  committed.lines[1].cov = 1e-4 * Eigen::Matrix2d::Identity();
+  std::vector<slam::LineFeature> committed = {Line(1, -5, -0.5, 5, -0.5), Line(2, 2, 3.5, 4, 3.5),
+                                              Line(3, 6, -0.5, 9, -0.5)};
+  committed[1].cov = 1e-4 * Eigen::Matrix2d::Identity();
   SavedLines fallback;
   fallback.lines = {Line(1, -5, -0.5, 9, -0.5), Line(2, 2, 3.52, 8, 3.52), Line(9, 2, 7.5, 4, 7.5)};
   fallback.lines[0].merged = {3};  // line 3 merged into 1 since the commit
@@ -242,9 +242,9 @@ TEST(WithCommittedLinesTest, SavedLinesGoBackToTheCommitOwnAndMergedOnesStay) {
   ASSERT_EQ(m.lines.size(), 3u);
   EXPECT_EQ(m.lines[1].id, 2);
   EXPECT_DOUBLE_EQ(m.lines[1].p1.x(), 4);  // back to 2..4 m
-  EXPECT_DOUBLE_EQ(m.lines[1].rho, committed.lines[1].rho);
-  EXPECT_DOUBLE_EQ(m.lines[1].theta, committed.lines[1].theta);
-  EXPECT_TRUE(m.lines[1].cov.isApprox(committed.lines[1].cov));
+  EXPECT_DOUBLE_EQ(m.lines[1].rho, committed[1].rho);
+  EXPECT_DOUBLE_EQ(m.lines[1].theta, committed[1].theta);
+  EXPECT_TRUE(m.lines[1].cov.isApprox(committed[1].cov));
   EXPECT_DOUBLE_EQ(m.lines[0].p1.x(), 9);  // took line 3 in: as the fallback has it
   EXPECT_EQ(m.lines[0].merged, std::vector<int>{3});
   EXPECT_DOUBLE_EQ(m.lines[2].p0.y(), 7.5);  // the mission's own line 9, untouched
