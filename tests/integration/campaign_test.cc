@@ -208,7 +208,7 @@ TEST(RoomFrameErrorTest, AMapTurnedAsAWholeIsNotLostInTheRoomsFrameABentOneIs) {
 }
 
 // The report's worst periods are measured again one run at a time: only the
-// runs with the largest period in the campaign, and the report lists them by
+// runs with the largest period in the campaign and those over a bound, and the report lists them by
 // that second measurement with the campaign's beside it.
 TEST(RemeasureWorstPeriodsTest, RunsTheLargestAgainAloneAndReportsBoth) {
   const robot::CoreOptions options = robot::DefaultCoreOptions();
@@ -221,8 +221,8 @@ TEST(RemeasureWorstPeriodsTest, RunsTheLargestAgainAloneAndReportsBoth) {
     runs[i].tick_max_ms = campaign_ms[i];
     runs[i].tick_phase = "planning";
   }
-  RemeasureWorstPeriods(&runs, options, 2);
-  EXPECT_LT(runs[0].tick_max_alone_ms, 0);  // not among the two largest: not re-run
+  RemeasureWorstPeriods(&runs, options, 1, 2.0);  // the largest, and seed 3 over 2 ms
+  EXPECT_LT(runs[0].tick_max_alone_ms, 0);  // neither the largest nor over 2 ms: not re-run
   for (size_t i = 1; i < runs.size(); ++i) {
     EXPECT_GT(runs[i].tick_max_alone_ms, 0);
     EXPECT_FALSE(runs[i].tick_phase_alone.empty());

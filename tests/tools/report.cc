@@ -144,7 +144,7 @@ int RunCampaignReport(const robot::CoreOptions& options, const std::string& prof
       return 2;
     }
     by_profile.push_back(campaign::RunCampaign(*profile, first_seed, runs, options, jobs, noise_nominal));
-    campaign::RemeasureWorstPeriods(&by_profile.back(), options, 20, noise_nominal);
+    campaign::RemeasureWorstPeriods(&by_profile.back(), options, 10, 2.0, noise_nominal);
     const campaign::Rates r = campaign::Summarise(by_profile.back());
     std::fprintf(stderr, "irslam-report: %s: %d runs, done %.1f %%, pieces good %.1f %%, complete %.1f %%, pose ok %.1f %%, lost %.1f %% (in the room's frame %.1f %%), contacts/run %.2f\n",
                  name.c_str(), r.runs, 100 * r.done, 100 * r.pieces_good, 100 * r.pieces_complete, 100 * r.pose_ok,
