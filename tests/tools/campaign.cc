@@ -19,6 +19,9 @@ namespace irslam::campaign {
 namespace {
 
 constexpr double kDeg = 180.0 / M_PI;
+// A re-measured period under this is taken as the run's own (RemeasureWorstPeriods):
+// the host's slices charged to a period are ~100 ms, the planner's budget 2 ms.
+constexpr double kHostSliceMs = 10;
 std::vector<TimedPose> FromJson(const nlohmann::json& arr) {
   std::vector<TimedPose> out;
   for (const auto& p : arr) out.push_back({p[0], {p[1], p[2], p[3]}});
@@ -169,9 +172,14 @@ void RemeasureWorstPeriods(std::vector<RunScore>* runs, const robot::CoreOptions
   for (size_t i = 0; i < order.size(); ++i) {
     RunScore& s = *order[i];
     if (i >= static_cast<size_t>(std::max(0, count)) && s.tick_max_ms <= above_ms) break;
-    const RunScore again = RunAndScore(s.seed, s.profile, options, options.mission.max_time_s, noise_nominal);
-    s.tick_max_alone_ms = again.tick_max_ms;
-    s.tick_phase_alone = again.tick_phase;
+    // The least of up to three: the run is deterministic, the host only adds.
+    for (int k = 0; k < 3 && (s.tick_max_alone_ms < 0 || s.tick_max_alone_ms > kHostSliceMs); ++k) {
+      const RunScore again = RunAndScore(s.seed, s.profile, options, options.mission.max_time_s, noise_nominal);
+      if (s.tick_max_alone_ms < 0 || again.tick_max_ms < s.tick_max_alone_ms) {
+        s.tick_max_alone_ms = again.tick_max_ms;
+        s.tick_phase_alone = again.tick_phase;
+      }
+    }
   }
 }
 
@@ -339,17 +347,19 @@ std::string RobustnessReport(const std::vector<std::vector<RunScore>>& by_profil
         "150 s about 0.19 % per wheel, 0.27 % on the ratio. Over that loop it is indistinguishable from a "
         "radius error, so no estimate of a constant ratio can be within 0.1 % in 95 % of these runs (the "
         "median error above is of that size); with the nominal profile's white slip it is.\n\n";
-  // The control loop's work per period (issue 15): the ten runs with the largest period alone.
+  // The control loop's work per period (issue 15): the ten runs with the largest period, re-measured.
   md << "## Control-loop work per period\n\n"
         "Each control period's work (the frames since the last period, then the tick), in the run's thread CPU "
         "time (`--jobs` runs at once; the real-time factor counts the host's load, the periods do not). The ten "
         "runs per profile with the largest period in the campaign, and every run with a period over 2 ms (the "
-        "budget, docs/benchmarks.md), are run again, one at a time (`RemeasureWorstPeriods`): with two runs' threads in one process this VM has charged single periods "
-        "with 100-101 ms that are not the run's work (in the slam, the mission or the planning alike; 2.7 ms "
-        "for the same runs one at a time, 3.3 ms in two processes at once; seen in some campaigns and not "
-        "others). The table has the ten largest periods, alone where re-run; *campaign*: the same run's largest period among "
-        "the others; *phase*: what took most of the period alone.\n\n"
-        "| profile | seed | world | robot time s | tick p99 ms | tick max ms (alone) | tick max ms (campaign) | "
+        "budget, docs/benchmarks.md), are run again after the campaign, one at a time, and the least of up to "
+        "three runs is kept (`RemeasureWorstPeriods`; the run is deterministic, the host only adds). This VM "
+        "charges a thread's CPU clock with time it did not run while the host is busy: single periods of "
+        "100-101 ms in the slam, the mission or the planning alike, in campaigns and in runs alone on a loaded "
+        "machine (the steal column of /proc/stat stays 0), where the same run measures 1-4 ms again. The table "
+        "has the ten largest periods, re-measured where re-run; *campaign*: the same run's largest period in the "
+        "campaign; *phase*: what took most of the period re-measured.\n\n"
+        "| profile | seed | world | robot time s | tick p99 ms | tick max ms (re-measured) | tick max ms (campaign) | "
         "phase | x real time |\n"
         "|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& runs : by_profile) {

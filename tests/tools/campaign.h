@@ -44,7 +44,7 @@ struct RunScore {
   // The control loop's work per period (issue 15), this host's clock (ms).
   double tick_p99_ms = 0, tick_max_ms = 0;
   std::string tick_phase;        // what took the largest period
-  // The same run again alone (RemeasureWorstPeriods; < 0: not re-run).
+  // The same run re-measured (RemeasureWorstPeriods; < 0: not re-run).
   double tick_max_alone_ms = -1;
   std::string tick_phase_alone;
   double x_realtime = 0;         // robot time / wall time of the run
@@ -74,12 +74,11 @@ struct Rates {
 Rates Summarise(const std::vector<RunScore>& runs);
 
 // The `count` runs with the largest period, and every run with a period over
-// `above_ms`, each run again on this thread with no other run beside it
-// (tick_max_alone_ms). Two runs' threads in one process can charge a period
-// with ~100 ms that is not the run's work (seen on this VM: 100-101 ms periods
-// in the slam, the mission or the planning, gone with the runs one at a time
-// or in two processes, docs/robustness.md); the run is deterministic, so only
-// the host differs.
+// `above_ms`, run again one at a time after the campaign: the least of up to
+// three (stopping at one under 10 ms) is tick_max_alone_ms. This VM charges a
+// thread's CPU clock with time it did not run while the host is busy (single
+// periods of 100-101 ms in any phase, in campaigns and in a run alone on a
+// loaded machine); the run is deterministic, so only the host differs.
 void RemeasureWorstPeriods(std::vector<RunScore>* runs, const robot::CoreOptions& options, int count,
                            double above_ms, const std::string& noise_nominal = "");
 
