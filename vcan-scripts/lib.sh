@@ -42,9 +42,11 @@ irslam_start() {
   local conf=$IRSLAM_ROOT/daemon/irslamd.conf
   if awk "BEGIN{exit !($scale > 1)}"; then
     conf=$run/irslamd.conf
-    sed "s|^    \"timeout_s\": 0.1,\$|    \"timeout_s\": $(awk "BEGIN{t=0.3*$scale; print (t > 10 ? 10 : t)}"),|" \
+    local timeout
+    timeout=$(awk "BEGIN{t=0.3*$scale; print (t > 10 ? 10 : t)}")
+    sed "s|^    \"timeout_s\": 0.1,\$|    \"timeout_s\": $timeout,|" \
       "$IRSLAM_ROOT/daemon/irslamd.conf" > "$conf"
-    grep -q "^    \"timeout_s\": $(awk "BEGIN{t=0.3*$scale; print (t > 10 ? 10 : t)}"),\$" "$conf" ||
+    grep -q "^    \"timeout_s\": $timeout,\$" "$conf" ||
       { echo "lib.sh: could not widen controller.timeout_s in $conf" >&2; return 1; }
   fi
   "$IRSLAM_BUILD/daemon/irslamd" --can "$bus" --socket "$sock" --time-scale "$scale" \
