@@ -44,6 +44,9 @@ class BumpMemory {
   // the map's frame, not the fresh local SLAM's `me` is in), and none closer
   // than skip_within_m to the robot's centre (under its body; 0: none left out).
   RangeScan Apply(const RangeScan& scan, const Pose2& me, size_t from = 0, double skip_within_m = 0) const;
+  // An obstacle known otherwise than by a bumper, remembered as a contact (the
+  // mouth of a pen left: mission.h).
+  void Mark(const Eigen::Vector2d& p) { points_.push_back(p); }
   const std::vector<Eigen::Vector2d>& points() const { return points_; }
   // The contacts recorded from index `from` on were in another frame: moves
   // them by t (a point in that frame -> this one). Issue 14: the bumps of a

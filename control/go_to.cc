@@ -55,10 +55,10 @@ options::Table<GoToOptions> GoToKeys() {
       {"approach_gain", &O::approach_gain, 0.01, 100, "1/s",
        "near the goal the speed is at most gain times distance"},
       {"approach_min_speed_mps", &O::approach_min_speed_mps, 0, 1, "m/s", "... plus this"},
-      {"line_extension_m", &O::line_extension_m, 0, 2, "m",
-       "mapped sides are planned around extended by this"},
-      {"hard_clearance_m", &O::hard_clearance_m, 0, 1, "m",
-       "never plan closer than the robot radius plus this"},
+      {"line_extension_m", &O::line_extension_m, 0, 2, "m", "mapped sides are planned around extended by this"},
+      {"hard_clearance_m", &O::hard_clearance_m, 0, 1, "m", "never plan closer than the robot radius plus this"},
+      {"tight_clearance_m", &O::tight_clearance_m, 0, 1, "m",
+       "a tight goal's plans (the way out of a pen) keep the robot radius plus this from the mapped sides"},
       {"keep_path_ratio", &O::keep_path_ratio, 1, 10, "",
        "keep the path being followed while at most this times the new one's length"},
       {"keep_path_slack_m", &O::keep_path_slack_m, 0, 10, "m", "... plus this"},
@@ -132,8 +132,9 @@ void ExtendedSides(const std::vector<slam::LineFeature>& lines, double extension
 }
 
 bool GoTo::TryGoal(double t, const Eigen::Vector2d& goal, double heading, bool align,
-                   const slam::Slam& slam, const BumpMemory& bumps) {
+                   const slam::Slam& slam, const BumpMemory& bumps, bool tight) {
   p1_ = goal;
+  tight_ = tight;
   p1_heading_ = heading;
   align_ = align;
   drop_contacts_ = false;
@@ -184,7 +185,7 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
   std::vector<Obstacle>& obstacles = plan_obstacles_;
   obstacles.clear();
   // Mapped sides, extended at their ends (ExtendedSides).
-  ExtendedSides(slam.lines(), o.line_extension_m, to_corners_, &obstacles);
+  ExtendedSides(slam.lines(), o.line_extension_m, to_corners_ || tight_, &obstacles);
   const Pose2 me = slam.pose();
   for (const auto& b : bumps.points()) {
     if ((b - Eigen::Vector2d(me.x, me.y)).norm() < o.under_body_contacts_m) continue;
@@ -217,7 +218,7 @@ PathPlanner::Progress GoTo::Replan(double t, const slam::Slam& slam, const Range
   }
   planner_.SetFreeTrail(trail_);
   PlannerOptions po = o.planner;
-  po.inflation_m = radius_m_ + o.clearance_m;
+  po.inflation_m = radius_m_ + (tight_ ? o.tight_clearance_m : o.clearance_m);
   po.hard_m = radius_m_ + o.hard_clearance_m;
   plan_from_ = {me.x, me.y};
   const int64_t t0 = clock_ ? clock_() : 0;

@@ -86,6 +86,8 @@ struct GoToOptions {
   // cleaning sets it, CleaningOptions::boxed_in_trail_m).
   double boxed_in_trail_m = 0;
   double hard_clearance_m = 0.02;  // never plan closer than robot radius + this
+  double tight_clearance_m = 0.03;  // a tight goal's plans (TryGoal) keep radius + this, and
+                                    // extend the sides only to their corners
   double keep_path_ratio = 1.25;   // keep the current path while shorter than ratio * new + slack
   double keep_path_slack_m = 0.2;
   double keep_path_skip_m = 0.3;  // ... and clear beyond this from the robot
@@ -158,9 +160,11 @@ class GoTo {
   // accepted and goes on in Step, the robot holding still; if it then finds no
   // path, Step gives the goal up ("no way found"). align: on arrival turn to
   // `heading` first; without, once reached the goal stays reached (the caller
-  // acts there).
+  // acts there). tight: plan with tight_clearance_m instead of clearance_m
+  // and the sides extended only to their corners (the way out of a pen: its
+  // gaps are what the usual clearance closes).
   bool TryGoal(double t, const Eigen::Vector2d& goal, double heading, bool align,
-               const slam::Slam& slam, const BumpMemory& bumps);
+               const slam::Slam& slam, const BumpMemory& bumps, bool tight = false);
   // Starts driving to the goal set by the last successful TryGoal.
   void Begin(double t);
   // One control step; bumpers: the bumper bits now.
@@ -260,6 +264,7 @@ class GoTo {
   bool to_corners_ = false;
   // This goal's plans may follow the robot's own recent path (Loosen).
   bool along_trail_ = false;
+  bool tight_ = false;  // this goal's plans keep tight_clearance_m, sides extended only to corners
   std::vector<Eigen::Vector2d> trail_;  // its points (internal frame), buffer reused
   double progress_t_ = -1;  // got go_to_progress_m further at this time ...
   Eigen::Vector2d progress_at_ = Eigen::Vector2d::Zero();  // ... from here

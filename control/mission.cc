@@ -67,6 +67,8 @@ Mission::Mission(MissionOptions options, WallFollowerOptions wall, ExploreOption
       follower_(wall, slam.mounts, slam.geometry.radius_m),
       modeler_(model),
       bumps_(options.bump, slam.mounts, slam.geometry.radius_m),
+      free_(options.pen, slam.mounts),
+      radius_m_(slam.geometry.radius_m),
       loop_(options.loop),
       go_to_(explore.go_to, slam.geometry, slam.mounts),
       contour_(explore.contour, wall.follow_distance_m),
@@ -140,6 +142,9 @@ void Mission::Reset(double t) {
   resume_cleaning_.reset();
   remodel_after_clean_ = false;
   explore_timed_out_ = false;
+  free_.Reset();
+  leaving_pen_ = false;
+  pens_left_ = 0;
 }
 
 void Mission::WatchChanges(const slam::Slam& slam, const std::vector<TimedPose>& trajectory) {
@@ -513,6 +518,7 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
 WheelCommand Mission::StepWallFollow(double t, double dt, const slam::Slam& slam,
                                      const RangeScan& raw_scan, bool bumped) {
   const Twist tw = follower_.Step(t, bumps_.Apply(raw_scan, slam.pose()), bumped);
+  if (options_.pen.pen_check && !reloc_ran_) free_.Record(slam.pose(), raw_scan);
   switch (loop_.Update(t, follower_.steady(), slam.pose(), slam.distance_m(), follower_.searching())) {
     case LoopEvent::kNone:
       break;
@@ -529,10 +535,85 @@ WheelCommand Mission::StepWallFollow(double t, double dt, const slam::Slam& slam
         loop_.Rearm(slam.pose(), slam.distance_m());
         break;
       }
-      // The room has been walked all round: model it.
+      // The room has been walked all round: model it (unless it was a pen).
+      if (LeavePen(t, slam)) return Halt();
       return To(MissionState::kModel, t, "wall-following loop closed");
   }
   return ToWheels(tw, dt);
+}
+
+bool Mission::LeavePen(double t, const slam::Slam& slam) {
+  const PenOptions& o = options_.pen;
+  if (!o.pen_check || reloc_ran_ || pens_left_ >= o.pen_max_escapes) return false;
+  const EnvironmentModel& m = modeler_.Update(slam.map_lines(), slam.map_trajectory());
+  if (!m.room.box) return false;
+  const double rot = slam.map_rotation();
+  RoomOutline room{*m.room.box, {}};
+  const std::vector<slam::LineFeature> lines = slam.map_lines();
+  for (size_t w = 0; w < 4; ++w) {
+    for (const int id : m.room.walls[w]) {
+      const auto l = std::find_if(lines.begin(), lines.end(), [&](const auto& x) { return x.id == id; });
+      if (l == lines.end()) continue;
+      const double a = w % 2 == 0 ? l->p0.x() : l->p0.y(), b = w % 2 == 0 ? l->p1.x() : l->p1.y();
+      room.covered[w].emplace_back(std::min(a, b), std::max(a, b));
+    }
+  }
+  const double open = free_.OutsideArea(room, rot, o.pen_margin_m);
+  if (open < o.pen_open_area_m2) return false;
+  // The most often seen free points beyond the box: the first one a path reaches.
+  constexpr size_t kCandidates = 8;
+  for (const Eigen::Vector2d& p : free_.OutsidePoints(room, rot, o.pen_goal_margin_m, radius_m_ + o.pen_goal_clear_m, o.pen_goal_away_m, kCandidates)) {
+    if (!go_to_.TryGoal(t, p, slam.pose().theta, false, slam, bumps_, true)) continue;
+    ++pens_left_;
+    leaving_pen_ = true;
+    pen_box_ = *m.room.box;
+    pen_rotation_ = rot;
+    pen_inside_.reset();
+    pen_mouth_.reset();
+    target_ = 0;
+    const long cm2 = std::lround(open * 100);  // (m2 with two decimals, without <cstdio>)
+    const std::string area = std::to_string(cm2 / 100) + "." + (cm2 % 100 < 10 ? "0" : "") +
+                             std::to_string(cm2 % 100);
+    Enter(MissionState::kGoToP1, t, "the loop went round a pen (" + area + " m2 of floor seen outside it): leaving it");
+    go_to_.Begin(t);
+    return true;
+  }
+  return false;
+}
+
+void Mission::TracePenExit(const Pose2& map_pose) {
+  if (pen_mouth_) return;
+  const Box& b = pen_box_;
+  const Eigen::Vector2d p(map_pose.x, map_pose.y);
+  if (p.x() >= b.xmin && p.x() <= b.xmax && p.y() >= b.ymin && p.y() <= b.ymax) {
+    pen_inside_ = p;
+    return;
+  }
+  if (pen_inside_) pen_mouth_ = p;
+}
+
+void Mission::ClosePenMouth() {
+  if (!pen_mouth_ || !pen_inside_) return;
+  // The side of the box the way out crossed: the one the step from inside to
+  // outside went past.
+  const Box& b = pen_box_;
+  const Eigen::Vector2d& o = *pen_mouth_;
+  Eigen::Vector2d c = o;
+  Eigen::Vector2d along(1, 0);
+  if (o.x() < b.xmin || o.x() > b.xmax) {
+    c.x() = o.x() < b.xmin ? b.xmin : b.xmax;
+    along = {0, 1};
+  } else {
+    c.y() = o.y() < b.ymin ? b.ymin : b.ymax;
+  }
+  constexpr double kStepM = 0.05, kHalfWidthM = 0.8, kHitM = 0.1;
+  for (const double sign : {1.0, -1.0}) {
+    for (double d = sign > 0 ? 0 : kStepM; d <= kHalfWidthM; d += kStepM) {
+      const Eigen::Vector2d q = RotateVector(c + sign * d * along, -pen_rotation_);
+      if (free_.HitNear(q, kHitM)) break;
+      bumps_.Mark(q);
+    }
+  }
 }
 
 WheelCommand Mission::StepModel(double t, const slam::Slam& slam) {
@@ -614,6 +695,10 @@ bool Mission::StartSurvey(double t, const slam::Slam& slam, const EnvironmentMod
 }
 
 WheelCommand Mission::AbandonGoTo(double t, const slam::Slam& slam, const std::string& why) {
+  if (leaving_pen_) {
+    leaving_pen_ = false;
+    return To(MissionState::kModel, t, "leaving the pen: " + why);
+  }
   if (target_ == 0) return To(MissionState::kModel, t, "survey point: " + why);
   if (InferNearWall(slam)) {
     return To(MissionState::kModel, t,
@@ -626,6 +711,7 @@ WheelCommand Mission::AbandonGoTo(double t, const slam::Slam& slam, const std::s
 
 WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam,
                                const RangeScan& raw_scan, uint8_t bumpers) {
+  if (leaving_pen_) TracePenExit(slam.map_pose());
   const GoTo::Result r = go_to_.Step(t, slam, raw_scan, bumpers, bumps_, follower_);
   switch (r.status) {
     case GoTo::Status::kDriving:
@@ -634,6 +720,13 @@ WheelCommand Mission::StepGoTo(double t, double dt, const slam::Slam& slam,
       return AbandonGoTo(t, slam, r.why);
     case GoTo::Status::kArrived:
       break;
+  }
+  if (leaving_pen_) {
+    // Out of the pen: the room's walls are still to be found and followed.
+    leaving_pen_ = false;
+    loops_done_ = 0;
+    ClosePenMouth();
+    return To(MissionState::kWallFollow, t, "out of the pen: following walls again");
   }
   if (target_ == 0) {
     // The survey point: one full turn on the spot, then model again.

@@ -33,6 +33,12 @@
 //                   "mission time limit reached: cleaning the room as modelled" (pending objects given up)
 // (clean and return_home: time limit [cleaning].max_time_s from entering clean.)
 //
+// A pen (free_space.h; [mission].pen_*; not after a relocalisation: its evidence is of another frame):
+//   wall_follow     room loop, the last one, floor seen free go_to_p1        "the loop went round a pen (a m2 of
+//                   outside its room box, a way out planned                   floor seen outside it): leaving it"
+//   go_to_p1        at the way out                           wall_follow     "out of the pen: following walls again"
+//   go_to_p1        timeout, stuck, blocked                  model           "leaving the pen: why"
+//
 // In a saved map (issue 14; relocalize.h):
 //   idle, done      start in a saved map (StartInMap)        relocalize      "relocalising in the saved map"
 //   idle, done      start, the live map modelled (StartKnown) model          "continuing in the map ..."
@@ -56,6 +62,7 @@
 #include "control/bump_memory.h"
 #include "control/clean.h"
 #include "control/contour_follow.h"
+#include "control/free_space.h"
 #include "control/go_to.h"
 #include "control/loop_detector.h"
 #include "control/path_planner.h"
@@ -94,6 +101,7 @@ struct MissionOptions {
   double max_step_s = 0.1;          // longest control step used for the acceleration limit
   LoopOptions loop;                 // [mission] too
   BumpMemoryOptions bump;           // [mission] too
+  PenOptions pen;                   // [mission] too
   std::string mode = "explore";     // explore: map the room; clean: map, clean, go home
   // Mode clean: the exploration reaching max_time_s with the room modelled (the
   // loop closed) cleans the room as it is modelled - the objects still pending
@@ -228,6 +236,14 @@ class Mission {
   bool InferNearWall(const slam::Slam& slam);
   // Picks the next survey point and starts going there; false if none is left.
   bool StartSurvey(double t, const slam::Slam& slam, const EnvironmentModel& m);
+  // At the last room loop: if the beams saw floor outside the room it encloses,
+  // plans the way out of the pen and returns true (go_to_p1).
+  bool LeavePen(double t, const slam::Slam& slam);
+  // Out of the pen: its mouth, where the way out left its box, is remembered as
+  // contacts (bumps_) along the box's side up to what the beams hit there, so
+  // that the followers and plans do not go back in.
+  void ClosePenMouth();
+  void TracePenExit(const Pose2& map_pose);
   // Modelled and explored: done, or in mode clean, plan the cleaning and start it.
   WheelCommand Finish(double t, const slam::Slam& slam, const EnvironmentModel& m,
                       std::string reason);
@@ -254,6 +270,8 @@ class Mission {
   WallFollower follower_;
   Modeler modeler_;
   BumpMemory bumps_;
+  FreeSpace free_;  // the floor the beams saw while following walls (SLAM frame)
+  double radius_m_;  // the robot's
   LoopDetector loop_;
   GoTo go_to_;
   ContourFollow contour_;
@@ -264,7 +282,13 @@ class Mission {
   MissionState state_ = MissionState::kIdle;
   MissionState resume_state_ = MissionState::kIdle;
   std::string reason_;
-  int target_ = 0;  // object being completed (0: a survey point)
+  int target_ = 0;  // object being completed (0: a survey point or a pen's way out)
+  bool leaving_pen_ = false;  // go_to_p1 drives out of a pen
+  Box pen_box_;               // ... the room its loop modelled (map frame, turned by pen_rotation_)
+  double pen_rotation_ = 0;
+  std::optional<Eigen::Vector2d> pen_inside_;  // on the way out: the last point inside the box (map frame)
+  std::optional<Eigen::Vector2d> pen_mouth_;   // ... where it left the box
+  int pens_left_ = 0;         // pens left this mission
   double started_at_ = 0;
   double last_t_ = 0;
   int loops_done_ = 0;

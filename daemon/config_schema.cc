@@ -241,6 +241,7 @@ void WalkConfig(DaemonSettings* s, Visitor* v) {
   v->Keys(&o->mission, control::MissionKeys());
   v->Keys(&o->mission.loop, control::LoopKeys());
   v->Keys(&o->mission.bump, control::BumpMemoryKeys());
+  v->Keys(&o->mission.pen, control::PenKeys());
   v->End();
   v->Section("cleaning", "coverage planning and cleaning (mission.mode = \"clean\"; docs/cleaning.md)");
   v->Keys(&o->mission.cleaning, control::CleaningKeys());
