@@ -90,6 +90,9 @@ Mission::Mission(MissionOptions options, WallFollowerOptions wall, ExploreOption
 void Mission::Enter(MissionState s, double t, std::string reason) {
   state_ = s;
   reason_ = std::move(reason);
+  // The way out of a pen is that go_to_p1's alone: any other state (a time
+  // limit, a stop) ends it, and a later go-to is an object's or a survey's.
+  if (s != MissionState::kGoToP1) leaving_pen_ = false;
   // Relocalising follows walls too: from a fresh follower, also when the map
   // stopped agreeing in the middle of cleaning (the follower was last used
   // long before, elsewhere; it held the robot still).
@@ -560,9 +563,11 @@ bool Mission::LeavePen(double t, const slam::Slam& slam) {
   }
   const double open = free_.OutsideArea(room, rot, o.pen_margin_m);
   if (open < o.pen_open_area_m2) return false;
-  // The most often seen free points beyond the box: the first one a path reaches.
+  // The seen-free points farthest beyond the box: the first one a path reaches.
   constexpr size_t kCandidates = 8;
-  for (const Eigen::Vector2d& p : free_.OutsidePoints(room, rot, o.pen_goal_margin_m, radius_m_ + o.pen_goal_clear_m, o.pen_goal_away_m, kCandidates)) {
+  const std::vector<Eigen::Vector2d> out = free_.OutsidePoints(
+      room, rot, o.pen_goal_margin_m, radius_m_ + o.pen_goal_clear_m, o.pen_goal_away_m, kCandidates);
+  for (const Eigen::Vector2d& p : out) {
     if (!go_to_.TryGoal(t, p, slam.pose().theta, false, slam, bumps_, true)) continue;
     ++pens_left_;
     leaving_pen_ = true;
@@ -574,7 +579,8 @@ bool Mission::LeavePen(double t, const slam::Slam& slam) {
     const long cm2 = std::lround(open * 100);  // (m2 with two decimals, without <cstdio>)
     const std::string area = std::to_string(cm2 / 100) + "." + (cm2 % 100 < 10 ? "0" : "") +
                              std::to_string(cm2 % 100);
-    Enter(MissionState::kGoToP1, t, "the loop went round a pen (" + area + " m2 of floor seen outside it): leaving it");
+    Enter(MissionState::kGoToP1, t,
+          "the loop went round a pen (" + area + " m2 of floor seen outside it): leaving it");
     go_to_.Begin(t);
     return true;
   }
