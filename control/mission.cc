@@ -548,11 +548,11 @@ WheelCommand Mission::StepWallFollow(double t, double dt, const slam::Slam& slam
 bool Mission::LeavePen(double t, const slam::Slam& slam) {
   const PenOptions& o = options_.pen;
   if (!o.pen_check || reloc_ran_ || pens_left_ >= o.pen_max_escapes) return false;
-  const EnvironmentModel& m = modeler_.Update(slam.map_lines(), slam.map_trajectory());
+  const std::vector<slam::LineFeature> lines = slam.map_lines();  // (a copy, turned: once)
+  const EnvironmentModel& m = modeler_.Update(lines, slam.map_trajectory());
   if (!m.room.box) return false;
   const double rot = slam.map_rotation();
   RoomOutline room{*m.room.box, {}};
-  const std::vector<slam::LineFeature> lines = slam.map_lines();
   for (size_t w = 0; w < 4; ++w) {
     for (const int id : m.room.walls[w]) {
       const auto l = std::find_if(lines.begin(), lines.end(), [&](const auto& x) { return x.id == id; });
@@ -573,7 +573,7 @@ bool Mission::LeavePen(double t, const slam::Slam& slam) {
     leaving_pen_ = true;
     pen_box_ = *m.room.box;
     pen_rotation_ = rot;
-    pen_inside_.reset();
+    pen_was_inside_ = false;
     pen_mouth_.reset();
     target_ = 0;
     const long cm2 = std::lround(open * 100);  // (m2 with two decimals, without <cstdio>)
@@ -592,16 +592,16 @@ void Mission::TracePenExit(const Pose2& map_pose) {
   const Box& b = pen_box_;
   const Eigen::Vector2d p(map_pose.x, map_pose.y);
   if (p.x() >= b.xmin && p.x() <= b.xmax && p.y() >= b.ymin && p.y() <= b.ymax) {
-    pen_inside_ = p;
+    pen_was_inside_ = true;
     return;
   }
-  if (pen_inside_) pen_mouth_ = p;
+  if (pen_was_inside_) pen_mouth_ = p;
 }
 
 void Mission::ClosePenMouth() {
-  if (!pen_mouth_ || !pen_inside_) return;
-  // The side of the box the way out crossed: the one the step from inside to
-  // outside went past.
+  if (!pen_mouth_) return;
+  // The side of the box the way out crossed: the one its first point outside
+  // lies beyond.
   const Box& b = pen_box_;
   const Eigen::Vector2d& o = *pen_mouth_;
   Eigen::Vector2d c = o;

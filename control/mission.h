@@ -286,8 +286,8 @@ class Mission {
   bool leaving_pen_ = false;  // go_to_p1 drives out of a pen
   Box pen_box_;               // ... the room its loop modelled (map frame, turned by pen_rotation_)
   double pen_rotation_ = 0;
-  std::optional<Eigen::Vector2d> pen_inside_;  // on the way out: the last point inside the box (map frame)
-  std::optional<Eigen::Vector2d> pen_mouth_;   // ... where it left the box
+  bool pen_was_inside_ = false;               // on the way out: the robot was inside the box
+  std::optional<Eigen::Vector2d> pen_mouth_;  // ... and here first outside it after (map frame)
   int pens_left_ = 0;         // pens left this mission
   double started_at_ = 0;
   double last_t_ = 0;
