@@ -55,6 +55,9 @@ options::Table<MissionOptions> MissionKeys() {
        "explore: map the room; clean: map it, clean the floor, return to the start"},
       {"clean_at_time_limit", &O::clean_at_time_limit, 0, 0, "",
        "mode clean: at max_time_s with the room modelled, clean it as modelled (false: end)"},
+      {"repeat_free_loop_m", &O::repeat_free_loop_m, 0, 10, "m",
+       "a free-object loop closing this near an earlier one, the room's four walls mapped: model the "
+       "room (0: always leave the object)"},
   };
   return kKeys;
 }
@@ -148,6 +151,7 @@ void Mission::Reset(double t) {
   free_.Reset();
   leaving_pen_ = false;
   pens_left_ = 0;
+  free_loops_.clear();
 }
 
 void Mission::WatchChanges(const slam::Slam& slam, const std::vector<TimedPose>& trajectory) {
@@ -264,7 +268,7 @@ WheelCommand Mission::StepRelocalize(double t, double dt, const slam::Slam& slam
   // remembered before are in the map's frame, not the local SLAM's: only those
   // of this relocalisation are seen (else the robot, at the local origin, saw
   // contacts from elsewhere in the room all round it and turned on the spot).
-  const Twist tw = follower_.Step(t, bumps_.Apply(raw_scan, slam.pose(), reloc_bumps_from_), bumped);
+  const Twist tw = follower_.Step(t, bumps_.Apply(raw_scan, slam.pose(), reloc_bumps_from_), bumped, &raw_scan);
   if (loop_.Update(t, follower_.steady(), slam.pose(), slam.distance_m(), follower_.searching()) == LoopEvent::kFreeObject)
     follower_.Leave(t);
   if (const std::optional<slam::PoseHypothesis> d = reloc_.Step(t, slam)) {
@@ -520,14 +524,21 @@ WheelCommand Mission::Step(double t, const slam::Slam& slam, const RangeScan& sc
 
 WheelCommand Mission::StepWallFollow(double t, double dt, const slam::Slam& slam,
                                      const RangeScan& raw_scan, bool bumped) {
-  const Twist tw = follower_.Step(t, bumps_.Apply(raw_scan, slam.pose()), bumped);
+  const Twist tw = follower_.Step(t, bumps_.Apply(raw_scan, slam.pose()), bumped, &raw_scan);
   if (options_.pen.pen_check && !reloc_ran_) free_.Record(slam.pose(), raw_scan);
   switch (loop_.Update(t, follower_.steady(), slam.pose(), slam.distance_m(), follower_.searching())) {
     case LoopEvent::kNone:
       break;
     case LoopEvent::kFreeObject:
       // Walked clockwise round the outside of something: a free object, not
-      // the room. Leave it and find a wall.
+      // the room. Leave it and find a wall - unless leaving brought the robot
+      // back to it along the room's walls: then the room is mapped already.
+      if (RepeatedFreeLoop(slam)) {
+        loop_times_.push_back(t);
+        ++loops_done_;
+        if (LeavePen(t, slam)) return Halt();
+        return To(MissionState::kModel, t, "circled the same free object again, the room's walls mapped");
+      }
       follower_.Leave(t);
       reason_ = "circled a free object; looking for a wall";
       break;
@@ -543,6 +554,20 @@ WheelCommand Mission::StepWallFollow(double t, double dt, const slam::Slam& slam
       return To(MissionState::kModel, t, "wall-following loop closed");
   }
   return ToWheels(tw, dt);
+}
+
+bool Mission::RepeatedFreeLoop(const slam::Slam& slam) {
+  const double r = options_.repeat_free_loop_m;
+  if (r <= 0) return false;
+  const Pose2 p = slam.pose();
+  const Eigen::Vector2d at(p.x, p.y);
+  const bool again =
+      std::any_of(free_loops_.begin(), free_loops_.end(), [&](const Eigen::Vector2d& q) { return (q - at).norm() < r; });
+  if (free_loops_.size() < kMaxFreeLoops) free_loops_.push_back(at);
+  if (!again) return false;
+  const EnvironmentModel& m = modeler_.Update(slam.map_lines(), slam.map_trajectory());
+  return m.room.box && std::all_of(m.room.walls.begin(), m.room.walls.end(),
+                                   [](const auto& ids) { return !ids.empty(); });
 }
 
 bool Mission::LeavePen(double t, const slam::Slam& slam) {

@@ -39,6 +39,11 @@
 //   go_to_p1        at the way out                           wall_follow     "out of the pen: following walls again"
 //   go_to_p1        timeout, stuck, blocked                  model           "leaving the pen: why"
 //
+// A free object circled again ([mission].repeat_free_loop_m):
+//   wall_follow     loop round a free object closing where   model           "circled the same free object
+//                   one closed before, the room's four walls                 again, the room's walls mapped"
+//                   mapped (as the last room loop: the pen check first)
+//
 // In a saved map (issue 14; relocalize.h):
 //   idle, done      start in a saved map (StartInMap)        relocalize      "relocalising in the saved map"
 //   idle, done      start, the live map modelled (StartKnown) model          "continuing in the map ..."
@@ -107,6 +112,12 @@ struct MissionOptions {
   // loop closed) cleans the room as it is modelled - the objects still pending
   // given up - instead of ending without cleaning. false: it ends (as in mode explore).
   bool clean_at_time_limit = true;
+  // A free-object loop closing within this of an earlier one's closing point,
+  // with the room's four walls mapped, ends wall following: the room is
+  // modelled from the map. (The follower, turned at a gap onto the same object
+  // each time, left it and came back along the same walls until the time limit:
+  // generated room 1028.) 0: always leave.
+  double repeat_free_loop_m = 0.5;
   CleaningOptions cleaning;         // [cleaning]
   RelocalizeOptions relocalize;     // [relocalize]
 };
@@ -239,6 +250,9 @@ class Mission {
   // At the last room loop: if the beams saw floor outside the room it encloses,
   // plans the way out of the pen and returns true (go_to_p1).
   bool LeavePen(double t, const slam::Slam& slam);
+  // At a free-object loop: it closed where one closed before (repeat_free_loop_m)
+  // and the room's four walls are mapped (remembers where it closed).
+  bool RepeatedFreeLoop(const slam::Slam& slam);
   // Out of the pen: its mouth, where the way out left its box, is remembered as
   // contacts (bumps_) along the box's side up to what the beams hit there, so
   // that the followers and plans do not go back in.
@@ -289,6 +303,8 @@ class Mission {
   bool pen_was_inside_ = false;               // on the way out: the robot was inside the box
   std::optional<Eigen::Vector2d> pen_mouth_;  // ... and here first outside it after (map frame)
   int pens_left_ = 0;         // pens left this mission
+  std::vector<Eigen::Vector2d> free_loops_;  // where free-object loops closed (at most kMaxFreeLoops)
+  static constexpr size_t kMaxFreeLoops = 16;
   double started_at_ = 0;
   double last_t_ = 0;
   int loops_done_ = 0;

@@ -37,6 +37,12 @@ options::Table<WallFollowerOptions> WallFollowerKeys() {
       {"backoff_speed_mps", &O::backoff_speed_mps, 0.01, 1.0, "m/s", "reverse speed after a bump"},
       {"backoff_time_s", &O::backoff_time_s, 0.0, 10.0, "s", "reverse for this long after a bump"},
       {"backoff_turn_rad", &O::backoff_turn_rad, 0.0, 3.2, "rad", "then turn left this much"},
+      {"squeeze_distance_m", &O::squeeze_distance_m, 0.0, 2.0, "m",
+       "boxed in (a whole inner-corner turn never clear ahead): drive out the most open way this far "
+       "(0: never)"},
+      {"squeeze_speed_mps", &O::squeeze_speed_mps, 0.01, 0.5, "m/s", "speed driving out when boxed in"},
+      {"squeeze_stop_m", &O::squeeze_stop_m, 0.1, 1.0, "m",
+       "driving out when boxed in ends this close ahead (from the centre)"},
   };
   return kKeys;
 }
@@ -57,6 +63,8 @@ const char* ToString(FollowMode m) {
       return "backoff";
     case FollowMode::kLeave:
       return "leave";
+    case FollowMode::kSqueeze:
+      return "squeeze";
   }
   return "?";
 }
@@ -89,6 +97,8 @@ void WallFollower::Enter(FollowMode m, double t) {
   mode_since_ = t;
   turned_rad_ = 0;
   backoff_forward_ = false;
+  corner_best_front_ = 0;
+  corner_best_turn_ = 0;
   if (m == FollowMode::kFollow) has_followed_ = true;
 }
 
@@ -121,22 +131,27 @@ std::optional<WallEstimate> WallFollower::RightWall(const RangeScan& scan) const
 }
 
 std::optional<double> WallFollower::FrontDistance(const RangeScan& scan) const {
+  // Only obstacles in the robot's swept corridor (and 5 cm beside it) count as "ahead".
+  return FrontDistance(scan, robot_radius_m_ + 0.05);
+}
+
+std::optional<double> WallFollower::FrontDistance(const RangeScan& scan, double half_width_m) const {
   std::optional<double> best;
   for (int i : {kFrontRight, kFront, kFrontLeft}) {
     if (!scan.range_m[i]) continue;
     const BeamHit p = HitPoint(mounts_[i], *scan.range_m[i]);
-    // Only obstacles in the robot's swept corridor count as "ahead".
-    if (std::abs(p.y) > robot_radius_m_ + 0.05 || p.x <= 0) continue;
+    if (std::abs(p.y) > half_width_m || p.x <= 0) continue;
     if (!best || p.x < *best) best = p.x;
   }
   return best;
 }
 
-Twist WallFollower::Step(double t, const RangeScan& scan, bool bumped) {
+Twist WallFollower::Step(double t, const RangeScan& scan, bool bumped, const RangeScan* sensor_scan) {
   const double dt = std::clamp(t - last_t_, 0.0, 0.1);
   last_t_ = t;
   const auto front = FrontDistance(scan);
   const auto wall = RightWall(scan);
+  body_front_ = FrontDistance(sensor_scan ? *sensor_scan : scan, robot_radius_m_);
   steady_ = false;
   if (bumped && mode_ != FollowMode::kBackoff) Enter(FollowMode::kBackoff, t);
   Twist out = StepMode(t, front, wall, bumped);
@@ -200,11 +215,10 @@ Twist WallFollower::StepMode(double t, std::optional<double> front,
       out = {0, o.turn_rate_rad_s};
       break;
     case FollowMode::kInnerCorner:
-      if (!front || *front > o.front_stop_m + 0.15) {
-        Enter(FollowMode::kFollow, t);
-        break;
-      }
-      out = {0, o.turn_rate_rad_s};
+      out = InnerCorner(t, front);
+      break;
+    case FollowMode::kSqueeze:
+      out = Squeeze(t);
       break;
     case FollowMode::kOuterCorner:
       if (front && *front < o.front_stop_m) {
@@ -226,6 +240,45 @@ Twist WallFollower::StepMode(double t, std::optional<double> front,
       break;
   }
   return out;
+}
+
+Twist WallFollower::InnerCorner(double t, std::optional<double> front) {
+  // Turn left on the spot until the way ahead is clear.
+  const auto& o = options_;
+  if (!front || *front > o.front_stop_m + 0.15) {
+    Enter(FollowMode::kFollow, t);
+    return {};
+  }
+  if (turned_rad_ < 2 * M_PI) {
+    // (Measured in the body's width: wedged between two legs, each a
+    // centimetre beside the body, every heading has something within the
+    // usual corridor's 5 cm margin.)
+    const double ahead = body_front_.value_or(o.front_stop_m + 0.15);
+    if (ahead > corner_best_front_) {
+      corner_best_front_ = ahead;
+      corner_best_turn_ = turned_rad_;
+    }
+  } else if (o.squeeze_distance_m > 0 && turned_rad_ >= 2 * M_PI + corner_best_turn_) {
+    // A whole turn and never clear ahead: boxed in all round by things
+    // nearer than the stop distance (a chair's legs; turning on went on
+    // until the time limit, generated room 1070). It got in, so there is
+    // a way out: drive the most open way seen, then follow again.
+    Enter(FollowMode::kSqueeze, t);
+    return {o.squeeze_speed_mps, 0};
+  }
+  return {0, o.turn_rate_rad_s};
+}
+
+Twist WallFollower::Squeeze(double t) {
+  // Driving out the most open way: by the sensors' own readings (a remembered
+  // contact may be the way out: it was touched turning, beside the way in).
+  const auto& o = options_;
+  if ((body_front_ && *body_front_ < o.squeeze_stop_m) ||
+      (t - mode_since_) * o.squeeze_speed_mps >= o.squeeze_distance_m) {
+    Enter(has_followed_ ? FollowMode::kFollow : FollowMode::kFind, t);
+    return {};
+  }
+  return {o.squeeze_speed_mps, 0};
 }
 
 Twist WallFollower::Follow(double t, std::optional<double> front,

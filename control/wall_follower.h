@@ -29,11 +29,18 @@ struct WallFollowerOptions {
   double backoff_speed_mps = 0.08;
   double backoff_time_s = 0.6;
   double backoff_turn_rad = 0.5;
+  // Boxed in: a whole inner-corner turn found nothing clear ahead (legs under a
+  // table all round). Drive out the most open way seen in that turn, slowly, this
+  // far at most, stopping this close to what is ahead (0: never; the robot turned
+  // on the spot until the time limit).
+  double squeeze_distance_m = 0.5;
+  double squeeze_speed_mps = 0.08;
+  double squeeze_stop_m = 0.25;
 };
 options::Table<WallFollowerOptions> WallFollowerKeys();  // [wall_follow]
 
 // Which case of the follower is active (shown in status).
-enum class FollowMode { kFind, kAlign, kFollow, kInnerCorner, kOuterCorner, kBackoff, kLeave };
+enum class FollowMode { kFind, kAlign, kFollow, kInnerCorner, kOuterCorner, kBackoff, kLeave, kSqueeze };
 const char* ToString(FollowMode m);
 
 struct Twist {
@@ -56,7 +63,9 @@ class WallFollower {
                double robot_radius_m);
 
   // One control step at robot time t with the latest scan; bumped: a bumper is pressed.
-  Twist Step(double t, const RangeScan& scan, bool bumped);
+  // sensor_scan: the sensors' own readings when scan has remembered contacts
+  // added (BumpMemory::Apply): driving out when boxed in goes by them alone.
+  Twist Step(double t, const RangeScan& scan, bool bumped, const RangeScan* sensor_scan = nullptr);
   void Reset();
   // Turn away (left, a quarter turn) from what is being followed and look for
   // another wall: used when the contour followed was a free object, not the room.
@@ -80,12 +89,19 @@ class WallFollower {
   // Exposed for tests.
   std::optional<WallEstimate> RightWall(const RangeScan& scan) const;
   std::optional<double> FrontDistance(const RangeScan& scan) const;
+  // The same in a corridor of this half width (what the body itself would hit:
+  // the robot's radius).
+  std::optional<double> FrontDistance(const RangeScan& scan, double half_width_m) const;
 
  private:
   void Enter(FollowMode m, double t);
   // The modes other than following: their twist (and mode changes).
   Twist StepMode(double t, std::optional<double> front, const std::optional<WallEstimate>& wall,
                  bool bumped);
+  // At an inner corner: turning left until clear ahead (or boxed in: squeeze).
+  Twist InnerCorner(double t, std::optional<double> front);
+  // Boxed in: driving out the most open way of the last whole turn.
+  Twist Squeeze(double t);
   // Following the wall on the right (or leaving following at a corner).
   Twist Follow(double t, std::optional<double> front, const std::optional<WallEstimate>& wall);
 
@@ -96,6 +112,11 @@ class WallFollower {
   double mode_since_ = 0;
   double last_t_ = 0;
   double turned_rad_ = 0;  // rotation accumulated in the current mode
+  // kInnerCorner: the largest distance ahead in the turn's first revolution, and
+  // the rotation it was seen at (where kSqueeze drives out).
+  double corner_best_front_ = 0;
+  double corner_best_turn_ = 0;
+  std::optional<double> body_front_;  // FrontDistance in the body's own width, this step
   bool backoff_forward_ = false;  // this backoff cycle drives forward (still in contact after one)
   bool has_followed_ = false;
   bool steady_ = false;

@@ -269,6 +269,52 @@ TEST(CleanCampaignSubsetTest, ALoopRoundAPenIsLeftForTheRoom) {
   }
 }
 
+// The clean campaign's two rooms that never began cleaning (idle at the
+// mission's time limit): the follower, turned at a gap onto a free compound
+// each time, circled it, left it, and came back to it along the same walls
+// (1028, 1070). A free-object loop closing where one closed before, with the
+// room's four walls mapped, now ends wall following as the room loop does
+// (mission.repeat_free_loop_m).
+TEST(CleanCampaignSubsetTest, ASecondLoopRoundTheSameFreeObjectModelsTheRoom) {
+  for (const double repeat : {0.5, 0.0}) {
+    robot::CoreOptions o = robot::DefaultCoreOptions();
+    o.mission.repeat_free_loop_m = repeat;
+    for (const uint64_t seed : {1028, 1070}) {
+      const metrics::CleanScore s = CleanGenerated(seed, o);
+      // Measured 2026-12-07: 1028 0.922, 1070 0.838; without: idle at the time limit, 0.
+      if (repeat > 0) {
+        EXPECT_EQ(s.end_state, "done") << seed;
+        EXPECT_GE(s.coverage, 0.75) << seed;
+      } else {
+        EXPECT_LE(s.coverage, 0.05) << seed << ": this loop no longer repeats: this test no longer tests it";
+      }
+    }
+  }
+}
+
+// Room 1070 with another run seed: the robot, wedged between two legs of a
+// chair, turned on the spot at an inner corner from 228 s to the time limit
+// (nothing ahead ever as far as front_stop_m + 0.15 in the follower's
+// corridor). A whole turn without a clear way now drives out the most open way
+// of the turn (wall_follow.squeeze_distance_m).
+TEST(CleanCampaignSubsetTest, BoxedInBetweenLegsTheFollowerDrivesOut) {
+  for (const double squeeze : {0.5, 0.0}) {
+    robot::CoreOptions o = robot::DefaultCoreOptions();
+    o.wall.squeeze_distance_m = squeeze;
+    const sim::World world = sim::GenerateWorld(1070, sim::NoiseProfile::kNominal);
+    const metrics::CleanScore s =
+        metrics::RunAndScoreClean(world, o, 1, o.mission.max_time_s + o.mission.cleaning.max_time_s, false);
+    std::printf("nominal/1070 run seed 1, squeeze %.1f: %s, coverage %.3f\n", squeeze, s.end_state.c_str(), s.coverage);
+    // Measured 2026-12-07: done, 0.913; without: idle at the time limit, 0.
+    if (squeeze > 0) {
+      EXPECT_EQ(s.end_state, "done");
+      EXPECT_GE(s.coverage, 0.80);
+    } else {
+      EXPECT_LE(s.coverage, 0.05) << "the follower is no longer boxed in here: this test no longer tests it";
+    }
+  }
+}
+
 // A fixed subset of the clean campaign where the robot, wedged at the bottom
 // of a dead end with its bumper held, escaped away from the wall behind it -
 // forward, into what it touched - and never moved: each go-to gave its goal up

@@ -65,10 +65,10 @@ std::map<std::string, Seen> AllKeys() {
 
 TEST(ControlOptionsTest, TablesAreConsistent) {
   const auto keys = AllKeys();
-  // mission: 7 + mode + clean_at_time_limit; loop: 7 (loop_orbit_turn_rad, loop_anchor_spacing_m); pen: 10 (free_space.h); go-to: 41 (tight_clearance_m, plan_pops_per_period, plan_cells_per_pop, blocked_escape_s, boxed_in_contacts_m,
+  // wall_follow: 16 (squeeze_*); mission: 7 + mode + clean_at_time_limit + repeat_free_loop_m; loop: 7 (loop_orbit_turn_rad, loop_anchor_spacing_m); pen: 10 (free_space.h); go-to: 41 (tight_clearance_m, plan_pops_per_period, plan_cells_per_pop, blocked_escape_s, boxed_in_contacts_m,
   // under_body_contacts_m);
   // model: 9 (same_size_m, trace_band_m, merge_touching_m, narrow_gap_m); cleaning: 33 (resume_overlap, resume_same_model_m, boxed_in_contacts_m, under_body_contacts_m, boxed_in_corners, boxed_in_trail_m, no_plan_spot_m); relocalize: 13 (scan_min_m; moved_share, moved_confirm_*) + 11 (moved furniture: wall_margin_m, stretched_m, corner_m, past_box_moves).
-  EXPECT_EQ(keys.size(), 13u + 9 + 7 + 6 + 10 + 41 + 2 + 6 + 13 + 9 + 33 + 13 + 11);
+  EXPECT_EQ(keys.size(), 16u + 10 + 7 + 6 + 10 + 41 + 2 + 6 + 13 + 9 + 33 + 13 + 11);
 }
 
 // The keys config.cc read before the tables, with their bounds.

@@ -160,5 +160,81 @@ TEST(WallFollowerTest, StillInContactAfterBackingOffBacksOffTheOtherWay) {
   EXPECT_EQ(f.mode(), FollowMode::kFind);
 }
 
+// Boxed in all round: legs nearer ahead than the inner corner's clear distance
+// (front_stop_m + 0.15) at every heading. The follower turned on the spot until
+// the mission's time limit (generated room 1070, wedged under a chair). After a
+// whole turn it turns on to the most open heading of that turn and drives out
+// that way, slowly, squeeze_distance_m at most; then it follows again.
+TEST(WallFollowerTest, BoxedInAllRoundDrivesOutTheMostOpenWay) {
+  const auto o = robot::DefaultCoreOptions();
+  WallFollower f(o.wall, o.slam.mounts, 0.17);
+  const double front_x = o.slam.mounts[3].x;  // the front sensor's reading is from here
+  const double open_heading = 2.0;            // rad: the way out
+  // The front sensor's reading at a heading: 0.35 m from the centre, 0.55 m
+  // within 0.2 rad of the way out (both short of clear: 0.60 m).
+  const auto scan_at = [&](double heading, double extra) {
+    RangeScan s;
+    const double d = std::abs(NormalizeAngle(heading - open_heading)) < 0.2 ? 0.55 : 0.35;
+    s.range_m[3] = d + extra - front_x;
+    return s;
+  };
+  double t = 0, th = 0;
+  const double dt = 0.02;
+  f.Step(t, WallOnRight(0.40, 0.0), false);
+  f.Step(t += dt, WallOnRight(0.40, 0.0), false);
+  ASSERT_EQ(f.mode(), FollowMode::kFollow);
+  Twist tw = f.Step(t += dt, scan_at(th, 0), false);
+  ASSERT_EQ(f.mode(), FollowMode::kInnerCorner);
+  double turned = 0;
+  for (int i = 0; i < 2000 && f.mode() == FollowMode::kInnerCorner; ++i) {
+    th += tw.omega * dt;
+    turned += tw.omega * dt;
+    tw = f.Step(t += dt, scan_at(th, 0), false);
+  }
+  ASSERT_EQ(f.mode(), FollowMode::kSqueeze);
+  EXPECT_GT(turned, 2 * M_PI);
+  EXPECT_LT(turned, 4 * M_PI);
+  EXPECT_LT(std::abs(NormalizeAngle(th - open_heading)), 0.25);
+  EXPECT_DOUBLE_EQ(tw.v, o.wall.squeeze_speed_mps);
+  EXPECT_DOUBLE_EQ(tw.omega, 0);
+  // Drives squeeze_distance_m (the way ahead stays open), then follows again.
+  double driven = 0;
+  for (int i = 0; i < 2000 && f.mode() == FollowMode::kSqueeze; ++i) {
+    driven += tw.v * dt;
+    tw = f.Step(t += dt, scan_at(th, 0), false);
+  }
+  EXPECT_NEAR(driven, o.wall.squeeze_distance_m, 2 * o.wall.squeeze_speed_mps * dt);
+  EXPECT_NE(f.mode(), FollowMode::kSqueeze);
+}
+
+// Driving out goes by the sensors' own readings: a remembered contact (added
+// to the scan the follower steers by) does not stop it, a reading closer than
+// squeeze_stop_m in the body's path does.
+TEST(WallFollowerTest, DrivingOutStopsForWhatTheSensorsSeeNotForRememberedContacts) {
+  const auto o = robot::DefaultCoreOptions();
+  const double front_x = o.slam.mounts[3].x;
+  const auto front = [&](double d) {
+    RangeScan s;
+    s.range_m[3] = d - front_x;
+    return s;
+  };
+  const auto boxed_in = [&](WallFollower* f, double* t) {
+    f->Step(*t, WallOnRight(0.40, 0.0), false);
+    f->Step(*t += 0.02, WallOnRight(0.40, 0.0), false);
+    for (int i = 0; i < 2000 && f->mode() != FollowMode::kSqueeze; ++i) f->Step(*t += 0.02, front(0.35), false);
+    ASSERT_EQ(f->mode(), FollowMode::kSqueeze);
+  };
+  WallFollower a(o.wall, o.slam.mounts, 0.17);
+  double t = 0;
+  boxed_in(&a, &t);
+  const RangeScan sensors = front(0.35);
+  Twist tw = a.Step(t += 0.02, front(0.20), false, &sensors);  // a remembered contact 20 cm ahead
+  EXPECT_EQ(a.mode(), FollowMode::kSqueeze);
+  EXPECT_DOUBLE_EQ(tw.v, o.wall.squeeze_speed_mps);
+  const RangeScan near = front(o.wall.squeeze_stop_m - 0.01);
+  a.Step(t += 0.02, near, false, &near);
+  EXPECT_NE(a.mode(), FollowMode::kSqueeze);
+}
+
 }  // namespace
 }  // namespace irslam::control
